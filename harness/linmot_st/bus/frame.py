@@ -1,0 +1,39 @@
+"""The CAN frame as the simulated bus, the emulator and the co-simulation pass it around.
+
+A small immutable value, cheaper than python-can's Message on the hot path of the simulated bus;
+`to_message`/`from_message` convert at the boundary to real python-can buses.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True, slots=True)
+class Frame:
+    can_id: int          # 11-bit identifier (COB-ID)
+    data: bytes = b""    # 0..8 bytes; the DLC is its length
+    rtr: bool = False    # remote transmission request (node guarding)
+
+    def __post_init__(self) -> None:
+        if not 0 <= self.can_id <= 0x7FF:
+            raise ValueError(f"CAN identifier {self.can_id:#x} is not an 11-bit identifier")
+        if len(self.data) > 8:
+            raise ValueError(f"CAN frame carries at most 8 data bytes, got {len(self.data)}")
+
+    @property
+    def dlc(self) -> int:
+        return len(self.data)
+
+    def __str__(self) -> str:  # candump style: 601#2301205046000A00
+        return f"{self.can_id:03X}#" + ("R" if self.rtr else self.data.hex().upper())
+
+    def to_message(self, timestamp: float = 0.0):
+        import can
+
+        return can.Message(arbitration_id=self.can_id, data=self.data, is_extended_id=False,
+                           is_remote_frame=self.rtr, dlc=len(self.data), timestamp=timestamp)
+
+    @classmethod
+    def from_message(cls, msg) -> "Frame":
+        return cls(msg.arbitration_id, bytes(msg.data), bool(msg.is_remote_frame))
