@@ -1,5 +1,12 @@
-"""CAN bus: frames, the deterministic simulated bus in virtual time, python-can adapters."""
+"""CAN bus: frames, the deterministic simulated bus in virtual time, python-can adapters.
+
+Note for node authors (the emulator): to serve a sans-I/O node on a python-can Bus in real time, use
+``linmot_st.bus.NodeServer(node, can_bus, on_start=node.power_on).start()`` and ``.stop()``; it calls
+``on_frame``/``on_timer``/``next_timer_ns`` from one background thread under ``server.lock`` with times
+in ns since start(). ``E1100Drive.attach(bus)`` / ``detach()`` wrap exactly that. docs/bus.md has the rest.
+"""
 
 from .frame import Frame
+from .pycan import NodeServer, open_bus
 
-__all__ = ["Frame"]
+__all__ = ["Frame", "NodeServer", "open_bus"]

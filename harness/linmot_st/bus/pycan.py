@@ -1,0 +1,168 @@
+"""Adapters to real python-can buses: serve a sans-I/O node in real time, open a bus from a short spec.
+
+`NodeServer` runs a node (the bus node protocol of docs/architecture.md section 3: `on_frame`,
+`on_timer`, `next_timer_ns`) on any python-can `Bus` from one background thread. The node's clock is
+the wall clock (monotonic), in ns since the server started, so a node written for virtual time runs
+unchanged. Every call into the node happens on the server thread while holding `server.lock`; other
+threads that inspect or change the node take the same lock (or use `server.call`).
+"""
+
+from __future__ import annotations
+
+import heapq
+import logging
+import threading
+import time
+from typing import Any, Callable, Iterable
+
+from .frame import Frame
+
+log = logging.getLogger(__name__)
+
+# Longest a recv() blocks, so that stop() and newly due frames are served promptly.
+_POLL_S = 0.02
+
+
+class NodeServer:
+    """Serve a sans-I/O node on a python-can Bus from a background thread, in real time.
+
+    ``on_start(t_ns)`` (for example the drive's ``power_on``) runs on the server thread at t = 0,
+    before any frame is received; frames it returns are sent like any other.
+    """
+
+    def __init__(self, node: Any, bus: Any, *, on_start: Callable[[int], Any] | None = None,
+                 name: str | None = None) -> None:
+        for method in ("on_frame", "on_timer", "next_timer_ns"):
+            if not callable(getattr(node, method, None)):
+                raise TypeError(f"{type(node).__name__} is not a bus node: it has no {method}() method")
+        self.node = node
+        self.bus = bus
+        self.name = name or type(node).__name__
+        self.lock = threading.RLock()
+        self._on_start = on_start
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._t0 = 0
+        self._out: list[tuple[int, int, Frame]] = []   # heap of (ready_ns, seq, frame)
+        self._seq = 0
+        self.error: BaseException | None = None        # first exception raised by the node
+        self.frames_received = 0
+        self.frames_sent = 0
+        self.send_errors = 0
+
+    # -- life cycle -------------------------------------------------------------------------
+    def start(self) -> "NodeServer":
+        if self._thread is not None:
+            raise RuntimeError(f"{self.name}: server already started")
+        self._t0 = time.monotonic_ns()
+        self._stop.clear()
+        self._thread = threading.Thread(target=self._run, name=f"NodeServer[{self.name}]", daemon=True)
+        self._thread.start()
+        return self
+
+    def stop(self, timeout: float = 2.0) -> None:
+        """Stop serving and join the thread; re-raises the first exception the node raised."""
+        thread, self._thread = self._thread, None
+        if thread is not None:
+            self._stop.set()
+            thread.join(timeout)
+            if thread.is_alive():
+                raise RuntimeError(f"{self.name}: server thread did not stop within {timeout} s")
+        if self.error is not None:
+            err, self.error = self.error, None
+            raise RuntimeError(f"{self.name}: the node raised {err!r}") from err
+
+    @property
+    def running(self) -> bool:
+        return self._thread is not None and self._thread.is_alive()
+
+    def __enter__(self) -> "NodeServer":
+        return self.start() if self._thread is None else self
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+    # -- clock and access -------------------------------------------------------------------
+    def now_ns(self) -> int:
+        """The node's time: wall-clock ns since start()."""
+        return time.monotonic_ns() - self._t0
+
+    def call(self, fn: Callable[..., Any], *args: Any) -> Any:
+        """Call ``fn(*args)`` under the node lock; a list of (ready_ns, Frame) it returns is sent."""
+        with self.lock:
+            result = fn(*args)
+            if isinstance(result, (list, tuple)) and all(
+                    isinstance(x, tuple) and len(x) == 2 and isinstance(x[1], Frame) for x in result):
+                self._queue(result)
+        return result
+
+    # -- the thread -------------------------------------------------------------------------
+    def _queue(self, frames: Iterable[tuple[int, Frame]] | None) -> None:
+        for ready, frame in frames or ():
+            self._seq += 1
+            heapq.heappush(self._out, (ready, self._seq, frame))
+
+    def _fail(self, exc: BaseException) -> None:
+        log.exception("%s: node raised", self.name)
+        if self.error is None:
+            self.error = exc
+
+    def _run(self) -> None:
+        node, bus, out = self.node, self.bus, self._out
+        if self._on_start is not None:
+            try:
+                with self.lock:
+                    self._queue(self._on_start(0))
+            except Exception as exc:  # noqa: BLE001 - reported by stop()
+                self._fail(exc)
+        while not self._stop.is_set():
+            now = self.now_ns()
+            try:
+                with self.lock:
+                    due = node.next_timer_ns()
+                    if due is not None and due <= now:
+                        self._queue(node.on_timer(now))
+                        due = node.next_timer_ns()
+            except Exception as exc:  # noqa: BLE001
+                self._fail(exc)
+                due = None
+            while out and out[0][0] <= now:
+                frame = heapq.heappop(out)[2]
+                try:
+                    bus.send(frame.to_message(timestamp=time.time()))
+                    self.frames_sent += 1
+                except Exception as exc:  # noqa: BLE001 - a full Tx queue must not kill the server
+                    self.send_errors += 1
+                    log.warning("%s: send %s failed: %s", self.name, frame, exc)
+            wake = min(x for x in (due, out[0][0] if out else None, now + int(_POLL_S * 1e9)) if x is not None)
+            msg = bus.recv(timeout=max(0.0, (wake - self.now_ns()) / 1e9))
+            if msg is None or msg.is_error_frame or msg.is_extended_id or getattr(msg, "is_fd", False):
+                continue
+            self.frames_received += 1
+            try:
+                frame = Frame.from_message(msg)
+                with self.lock:
+                    self._queue(node.on_frame(frame, self.now_ns()))
+            except Exception as exc:  # noqa: BLE001
+                self._fail(exc)
+
+
+def open_bus(spec: str, *, bitrate: int = 500_000, **kwargs: Any):
+    """Open a python-can Bus from a short spec: ``virtual``, ``virtual:CHANNEL``, ``socketcan:CHANNEL``,
+    or ``INTERFACE:CHANNEL`` for any python-can interface (never ``udp_multicast`` here: its traffic
+    leaves the machine)."""
+    import can
+
+    interface, _, channel = spec.partition(":")
+    interface = interface.strip().lower()
+    if not interface:
+        raise ValueError(f"bad bus spec {spec!r}: expected INTERFACE[:CHANNEL], e.g. virtual or socketcan:vcan0")
+    if interface == "udp_multicast":
+        raise ValueError("the udp_multicast interface is not supported: its traffic leaves the machine")
+    if interface == "virtual":
+        return can.Bus(interface="virtual", channel=channel or "linmot-st", **kwargs)
+    if not channel:
+        raise ValueError(f"bad bus spec {spec!r}: interface {interface} needs a channel, e.g. {interface}:can0")
+    if interface == "socketcan":  # the bit rate of a SocketCAN interface is set with `ip link`, not here
+        return can.Bus(interface="socketcan", channel=channel, **kwargs)
+    return can.Bus(interface=interface, channel=channel, bitrate=bitrate, **kwargs)
