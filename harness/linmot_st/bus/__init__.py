@@ -6,7 +6,12 @@ Note for node authors (the emulator): to serve a sans-I/O node on a python-can B
 in ns since start(). ``E1100Drive.attach(bus)`` / ``detach()`` wrap exactly that. docs/bus.md has the rest.
 """
 
+from .bits import bus_bits, frame_length_bits, stuff_bit_count
+from .faults import Fault, flip_bit, match_id, with_data
 from .frame import Frame
 from .pycan import NodeServer, open_bus
+from .sim import Endpoint, SimBus, TraceEntry
+from .stats import BusStats
 
-__all__ = ["Frame", "NodeServer", "open_bus"]
+__all__ = ["Frame", "SimBus", "Endpoint", "TraceEntry", "BusStats", "Fault", "NodeServer", "open_bus",
+           "bus_bits", "frame_length_bits", "stuff_bit_count", "flip_bit", "match_id", "with_data"]

@@ -1,0 +1,409 @@
+"""The deterministic simulated CAN bus: a discrete-event model in virtual time (ns).
+
+Participants are sans-I/O nodes (docs/architecture.md section 3) and endpoints (the PLC). Each has one
+transmit queue served in order of ready time (FIFO among equal times), like a CAN controller with one
+transmit buffer fed by a driver queue. Only the head of each queue competes for the bus.
+
+Timing. A frame started at s ends at e = s + frame_length_bits * bit time (SOF..EOF, stuff bits
+included); receivers get it at e, the bus is free again at e + 3 bit times (interframe space).
+Arbitration at time T takes every queue head ready at or before T, the lowest identifier wins; equal
+identifiers from different participants go in attach order (on a real bus they would collide). The
+frames a node returns get its latency added to their ready times.
+
+Order of events at one instant: frame end (delivery), scheduled actions, node timers, then
+arbitration, so a frame made ready by any of the first three at T still competes at T.
+`run_until(t)` processes everything up to t except a transmission start at exactly t: that one is
+decided when time moves on, so frames an endpoint sends at t (the PLC's scan time) join it.
+"""
+
+from __future__ import annotations
+
+import heapq
+from bisect import insort
+from typing import Any, Callable, Iterable, NamedTuple
+
+from .bits import ERROR_FRAME_BITS, IFS_BITS, frame_length_bits
+from .faults import STAGE, Fault, Predicate
+from .frame import Frame
+
+STANDARD_BITRATES = (125_000, 250_000, 500_000, 1_000_000)
+TEC_BUS_OFF = 256   # transmit error counter: +8 per transmit error, -1 per success (CAN 2.0 fault confinement)
+
+
+class TraceEntry(NamedTuple):
+    start_ns: int
+    end_ns: int          # end of EOF (of the error frame for status "error"); the bus is idle 3 bits later
+    sender: str
+    frame: Frame         # as the receivers saw it (after mutate_payload)
+    status: str          # "ok", "mutated" (mutate_payload) or "error" (destroyed by an error frame)
+
+
+class _Part:
+    """A participant's state on the bus."""
+
+    __slots__ = ("name", "node", "latency", "queue", "timer", "order", "tec", "bus_off", "sent", "discarded")
+
+    def __init__(self, name: str, node: Any, latency: int, order: int) -> None:
+        self.name, self.node, self.latency, self.order = name, node, latency, order
+        self.queue: list[tuple[int, int, Frame]] = []    # (ready_ns, seq, frame), sorted
+        self.timer: int | None = None
+        self.tec = 0
+        self.bus_off = False
+        self.sent = 0
+        self.discarded = 0
+
+
+class Endpoint:
+    """A participant that is not a node (the PLC): frames in by `send`, frames out by `receive`."""
+
+    def __init__(self, bus: "SimBus", name: str) -> None:
+        self.bus, self.name = bus, name
+        self.inbox: list[tuple[int, Frame]] = []   # (end time, frame) in delivery order
+
+    def send(self, frame: Frame, t_ns: int | None = None) -> None:
+        """Queue a frame, ready at t_ns (default: the bus's current time)."""
+        self.bus._submit(self.bus._parts_by_name[self.name], self.bus.now if t_ns is None else t_ns, frame)
+
+    def receive(self) -> list[tuple[int, Frame]]:
+        """The frames delivered since the last call, as (end time, frame)."""
+        got, self.inbox = self.inbox, []
+        return got
+
+    # the node protocol, so that the bus treats it like any participant
+    def on_frame(self, frame: Frame, t_ns: int) -> tuple:
+        self.inbox.append((t_ns, frame))
+        return ()
+
+    def on_timer(self, t_ns: int) -> tuple:
+        return ()
+
+    def next_timer_ns(self) -> None:
+        return None
+
+
+class SimBus:
+    def __init__(self, bitrate: int = 500_000) -> None:
+        if not isinstance(bitrate, int) or bitrate <= 0 or 1_000_000_000 % bitrate:
+            raise ValueError(f"bit rate {bitrate!r} must be a positive integer dividing 1e9 bit/s "
+                             f"(e.g. one of {STANDARD_BITRATES})")
+        self.bitrate = bitrate
+        self.bit_ns = 1_000_000_000 // bitrate
+        self.now = 0
+        self.trace: list[TraceEntry] = []
+        self.faults: list[Fault] = []
+        self._parts: list[_Part] = []
+        self._parts_by_name: dict[str, _Part] = {}
+        self._order = 0
+        self._seq = 0
+        self._tx: list | None = None     # in flight: [part, frame, start, end, status, retransmit]
+        self._idle_at = 0                # the bus is free for arbitration from this time on
+        self._actions: list[tuple[int, int, Callable[[int], Any]]] = []
+        self._length_cache: dict[Frame, int] = {}
+        self._stage: dict[str, list[Fault]] = {"queued": [], "start": [], "end": []}
+
+    # -- participants -----------------------------------------------------------------------
+    def attach(self, node: Any, name: str | None = None, latency_ns: int = 0) -> str:
+        """Attach a sans-I/O node; its frames get ``latency_ns`` added to their ready times."""
+        for method in ("on_frame", "on_timer", "next_timer_ns"):
+            if not callable(getattr(node, method, None)):
+                raise TypeError(f"{type(node).__name__} is not a bus node: it has no {method}() method")
+        if latency_ns < 0:
+            raise ValueError(f"latency_ns must be >= 0, got {latency_ns}")
+        name = name or getattr(node, "name", None) or f"node{self._order + 1}"
+        if name in self._parts_by_name:
+            raise ValueError(f"a participant named {name!r} is already on the bus")
+        self._order += 1
+        part = _Part(name, node, latency_ns, self._order)
+        self._parts.append(part)
+        self._parts_by_name[name] = part
+        self._read_timer(part)
+        return name
+
+    def endpoint(self, name: str = "plc", latency_ns: int = 0) -> Endpoint:
+        """A participant driven from outside (the PLC): ``send(frame, t_ns)``, ``receive()``."""
+        ep = Endpoint(self, name)
+        self.attach(ep, name, latency_ns)
+        return ep
+
+    def detach(self, name: str) -> None:
+        """Remove a participant now (see remove_node for a scheduled removal)."""
+        self._remove(self._part(name), self.now)
+
+    def node(self, name: str) -> Any:
+        return self._part(name).node
+
+    @property
+    def names(self) -> list[str]:
+        return [p.name for p in self._parts]
+
+    def _part(self, name: str) -> _Part:
+        try:
+            return self._parts_by_name[name]
+        except KeyError:
+            raise KeyError(f"no participant named {name!r} on the bus (have: {', '.join(self.names)})") from None
+
+    # -- scheduled actions and node faults --------------------------------------------------
+    def call_at(self, t_ns: int, fn: Callable[[int], Any]) -> None:
+        """Call ``fn(t)`` at virtual time t_ns (after deliveries at t, before timers and arbitration at t)."""
+        if t_ns < self.now:
+            raise ValueError(f"call_at({t_ns}) is in the past (bus time is {self.now})")
+        self._seq += 1
+        heapq.heappush(self._actions, (t_ns, self._seq, fn))
+
+    def reset_node(self, name: str, at_ns: int, hook: str | None = "power_on") -> None:
+        """At ``at_ns`` the node's controller is reset: its transmit queue is lost (a frame it is sending
+        is cut off by an error frame), its error counter cleared, then ``node.<hook>(t)`` is called (the
+        drive's power_on); frames the hook returns are queued."""
+        part = self._part(name)
+        if hook is not None and not callable(getattr(part.node, hook, None)):
+            raise AttributeError(f"node {name!r} has no {hook}() method to call on reset")
+
+        def reset(t: int) -> None:
+            if self._parts_by_name.get(name) is not part:
+                return   # removed meanwhile
+            self._abort_tx_of(part, t)
+            part.queue.clear()
+            part.tec, part.bus_off = 0, False
+            if hook is not None:
+                self._queue_all(part, t, getattr(part.node, hook)(t))
+            self._read_timer(part)
+
+        self.call_at(at_ns, reset)
+
+    def remove_node(self, name: str, at_ns: int) -> None:
+        """At ``at_ns`` the participant leaves the bus (power cut): its queue is lost, it gets no more
+        frames, and a frame it is sending is cut off by an error frame."""
+        part = self._part(name)
+        self.call_at(at_ns, lambda t: self._remove(part, t) if self._parts_by_name.get(name) is part else None)
+
+    def _remove(self, part: _Part, t: int) -> None:
+        self._abort_tx_of(part, t)
+        self._parts.remove(part)
+        del self._parts_by_name[part.name]
+        part.queue.clear()
+
+    def _abort_tx_of(self, part: _Part, t: int) -> None:
+        tx = self._tx
+        if tx is not None and tx[0] is part and t < tx[3]:
+            # The receivers see a stuff or form error at once and signal it: model the error frame from t.
+            tx[3] = t + ERROR_FRAME_BITS * self.bit_ns
+            tx[4], tx[5] = "error", False
+            self._idle_at = tx[3] + IFS_BITS * self.bit_ns
+
+    # -- frame faults ------------------------------------------------------------------------
+    def _add_fault(self, fault: Fault) -> Fault:
+        self.faults.append(fault)
+        self._stage[STAGE[fault.kind]].append(fault)
+        return fault
+
+    def drop(self, predicate: Predicate, *, sender: str | None = None, count: int | None = None) -> Fault:
+        """Matching frames never reach the bus (lost in the sender; no bus time, not in the trace)."""
+        return self._add_fault(Fault("drop", predicate, sender, count))
+
+    def delay(self, predicate: Predicate, delay_ns: int, *, sender: str | None = None,
+              count: int | None = None) -> Fault:
+        """Matching frames become ready ``delay_ns`` later than the sender asked (later frames of the
+        same sender that are ready earlier overtake them)."""
+        if delay_ns < 0:
+            raise ValueError("delay_ns must be >= 0")
+        return self._add_fault(Fault("delay", predicate, sender, count, delay_ns=delay_ns))
+
+    def duplicate(self, predicate: Predicate, *, sender: str | None = None, count: int | None = None) -> Fault:
+        """Matching frames are transmitted twice in a row (receivers get both)."""
+        return self._add_fault(Fault("duplicate", predicate, sender, count))
+
+    def corrupt(self, predicate: Predicate, *, sender: str | None = None, count: int | None = None) -> Fault:
+        """Matching transmissions are destroyed: the receivers' error frame follows the ACK delimiter,
+        nobody receives the frame, the sender retransmits it automatically when the bus is idle.
+        Each counts +8 on the sender's transmit error counter; at 256 the sender goes bus-off."""
+        return self._add_fault(Fault("corrupt", predicate, sender, count))
+
+    def mutate_payload(self, predicate: Predicate, mutate: Callable[[Frame], Frame], *,
+                       sender: str | None = None, count: int | None = None) -> Fault:
+        """Receivers get ``mutate(frame)`` instead of the frame: an undetected corruption, which a sound
+        CAN bus cannot produce. Use it only to test a receiver's robustness against bad content."""
+        return self._add_fault(Fault("mutate_payload", predicate, sender, count, mutate=mutate))
+
+    # -- running ----------------------------------------------------------------------------
+    def _read_timer(self, part: _Part) -> None:
+        t = part.node.next_timer_ns()
+        part.timer = None if t is None else max(int(t), self.now)
+
+    def _submit(self, part: _Part, ready: int, frame: Frame) -> None:
+        if ready < self.now:
+            raise ValueError(f"{part.name}: frame {frame} ready at {ready} ns is in the past "
+                             f"(bus time is {self.now} ns)")
+        self._enqueue(part, ready + part.latency, frame)
+
+    def _queue_all(self, part: _Part, t: int, frames: Iterable[tuple[int, Frame]] | None) -> None:
+        latency = part.latency
+        for ready, frame in frames or ():
+            if ready < t:
+                raise ValueError(f"{part.name}: returned frame {frame} ready at {ready} ns, before the "
+                                 f"event time {t} ns")
+            self._enqueue(part, ready + latency, frame)
+
+    def _enqueue(self, part: _Part, ready: int, frame: Frame) -> None:
+        if part.bus_off:
+            part.discarded += 1
+            return
+        for fault in self._stage["queued"]:
+            if fault.matches(part.name, frame):
+                fault.hit(ready, part.name, frame)
+                ready += fault.delay_ns
+        self._seq += 1
+        q = part.queue
+        if not q or ready >= q[-1][0]:
+            q.append((ready, self._seq, frame))
+        else:
+            insort(q, (ready, self._seq, frame))
+
+    def next_event_ns(self) -> int | None:
+        """Time of the next event (frame end, action, timer, transmission start), None if there is none."""
+        times = [p.timer for p in self._parts if p.timer is not None]
+        if self._tx is not None:
+            times.append(self._tx[3])
+        elif any(p.queue for p in self._parts):
+            times.append(max(self._idle_at, min(p.queue[0][0] for p in self._parts if p.queue)))
+        if self._actions:
+            times.append(self._actions[0][0])
+        return min(times) if times else None
+
+    def run_until(self, t_end: int) -> None:
+        """Advance virtual time to t_end, processing every event up to it (see the module doc)."""
+        if t_end < self.now:
+            raise ValueError(f"run_until({t_end}): bus time is already {self.now} ns")
+        parts = self._parts
+        actions = self._actions
+        while True:
+            tx = self._tx
+            # the earliest event; ties go to the first kind checked
+            if tx is not None:
+                t_next, kind = tx[3], 0
+            else:
+                t_next, kind = t_end + 1, -1
+            if actions and actions[0][0] < t_next:
+                t_next, kind = actions[0][0], 1
+            timer_part = None
+            for p in parts:
+                pt = p.timer
+                if pt is not None and pt < t_next:
+                    t_next, kind, timer_part = pt, 2, p
+            if tx is None:
+                ready = None
+                for p in parts:
+                    if p.queue:
+                        r = p.queue[0][0]
+                        if ready is None or r < ready:
+                            ready = r
+                if ready is not None:
+                    t_arb = ready if ready > self._idle_at else self._idle_at
+                    if t_arb < t_next and t_arb < t_end:
+                        t_next, kind = t_arb, 3
+            if kind < 0 or t_next > t_end:
+                break
+            self.now = t_next
+            if kind == 0:
+                self._end_tx(tx)
+            elif kind == 1:
+                heapq.heappop(actions)[2](t_next)
+            elif kind == 2:
+                self._fire_timer(timer_part, t_next)
+            else:
+                self._arbitrate(t_next)
+        self.now = t_end
+
+    def _fire_timer(self, part: _Part, t: int) -> None:
+        self._queue_all(part, t, part.node.on_timer(t))
+        self._read_timer(part)
+        if part.timer is not None and part.timer <= t:
+            raise RuntimeError(f"{part.name}: next_timer_ns() is still {part.timer} after on_timer({t}); "
+                               f"a node must move its timer forward when it fires")
+
+    def _arbitrate(self, t: int) -> None:
+        while True:
+            winner = None
+            for p in self._parts:
+                q = p.queue
+                if q and q[0][0] <= t and (winner is None or q[0][2].can_id < winner.queue[0][2].can_id):
+                    winner = p
+            if winner is None:
+                return
+            frame = winner.queue.pop(0)[2]
+            status = "ok"
+            for fault in self._stage["start"]:
+                if fault.matches(winner.name, frame):
+                    fault.hit(t, winner.name, frame)
+                    status = fault.kind
+                    break
+            if status == "drop":
+                continue   # lost before the bus: the next candidate arbitrates at the same instant
+            bits = self._length_cache.get(frame)
+            if bits is None:
+                if len(self._length_cache) > 100_000:
+                    self._length_cache.clear()
+                bits = self._length_cache[frame] = frame_length_bits(frame)
+            if status == "corrupt":
+                # the receivers' CRC check fails; their error flag starts after the ACK delimiter
+                bits = bits - 7 + ERROR_FRAME_BITS
+                self._tx = [winner, frame, t, t + bits * self.bit_ns, "error", True]
+            else:
+                self._tx = [winner, frame, t, t + bits * self.bit_ns, "ok", False]
+            self._idle_at = self._tx[3] + IFS_BITS * self.bit_ns
+            return
+
+    def _end_tx(self, tx: list) -> None:
+        part, frame, start, end, status, retransmit = tx
+        self._tx = None
+        if status == "error":
+            self.trace.append(TraceEntry(start, end, part.name, frame, "error"))
+            part.tec += 8
+            if part.tec >= TEC_BUS_OFF:
+                part.bus_off = True
+                part.discarded += len(part.queue) + 1
+                part.queue.clear()
+            elif retransmit and self._parts_by_name.get(part.name) is part:
+                self._requeue_first(part, end, frame)
+            return
+        if part.tec:
+            part.tec -= 1
+        part.sent += 1
+        sent = frame
+        duplicate = False
+        for fault in self._stage["end"]:
+            if fault.matches(part.name, sent):
+                fault.hit(end, part.name, sent)
+                if fault.kind == "duplicate":
+                    duplicate = True
+                else:
+                    frame = fault.mutate(frame)
+                    status = "mutated"
+        self.trace.append(TraceEntry(start, end, part.name, frame, status))
+        for p in self._parts:
+            if p is not part:
+                out = p.node.on_frame(frame, end)
+                if out:
+                    self._queue_all(p, end, out)
+                self._read_timer(p)
+        if duplicate and self._parts_by_name.get(part.name) is part:
+            self._requeue_first(part, end, sent)
+
+    def _requeue_first(self, part: _Part, t: int, frame: Frame) -> None:
+        """Put a frame back at the head of the sender's queue (automatic retransmission)."""
+        q = part.queue
+        ready = min(t, q[0][0]) if q else t   # keeps the queue sorted; it is due at once either way
+        self._seq += 1
+        q.insert(0, (ready, self._seq, frame))
+
+    # -- results -------------------------------------------------------------------------------
+    def stats(self, t0_ns: int = 0, t1_ns: int | None = None):
+        """Bus statistics over [t0, t1) (default: from 0 to the current time); see BusStats."""
+        from .stats import bus_stats
+
+        return bus_stats(self.trace, self.bit_ns, t0_ns, self.now if t1_ns is None else t1_ns)
+
+    def write_trace(self, path) -> None:
+        """Write the trace in the format of the file's extension (.log candump, .asc, .blf) with python-can."""
+        from .trace import write_trace
+
+        write_trace(self.trace, path)
