@@ -1,0 +1,245 @@
+"""Co-simulation: a PLC's CAN mailbox (T_CanMailbox, st_lib/types/can.st) coupled to a bus, scan by scan.
+
+`CoSim` runs in virtual time against the simulated bus (docs/architecture.md section 5). Each scan at
+PLC time t:
+  1. bus.run_until(t): every frame whose transmission ended at or before t is delivered;
+  2. the frames the PLC's endpoint received since the previous scan go into Rx[1..RxCount], in
+     delivery order; beyond 32 the rest are dropped and counted in RxLost (as a PLC CAN driver does);
+  3. plc.step(1);
+  4. Tx[1..TxCount] are sent in order, ready at t, and TxCount is set to 0.
+`RealTimeCoSim` does the same on a python-can bus against the wall clock (`linmot-st commission
+--bus virtual|socketcan:CHANNEL`): scan k starts at the wall time of the PLC's clock, and the frames
+received until then go into Rx.
+
+Mailbox access uses the loader's bound accessors, each bound once on first use, so a scan costs a few
+attribute accesses plus the PLC step.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any, Callable
+
+from linmot_st.bus.frame import Frame
+
+MAILBOX_FRAMES = 32   # T_CanFrames : ARRAY[1..32] OF T_CanFrame
+
+
+class CoSimError(Exception):
+    """The PLC put something into its mailbox that no CAN driver could send."""
+
+
+class CoSimTimeout(TimeoutError):
+    """run_until() reached max_scans (or its timeout) before the predicate held."""
+
+
+class Mailbox:
+    """Bound accessors of one T_CanMailbox variable of a PLC (RxCount, Rx, RxLost, TxCount, Tx, TxLost)."""
+
+    def __init__(self, plc: Any, path: str) -> None:
+        self.plc = plc
+        self.path = path
+        try:
+            self._rx_count = plc.var(f"{path}.RxCount")
+            self._rx_lost = plc.var(f"{path}.RxLost")
+            self._tx_count = plc.var(f"{path}.TxCount")
+            self._tx_lost = plc.var(f"{path}.TxLost")
+        except KeyError as exc:
+            raise KeyError(f"{path} is not a T_CanMailbox variable of this PLC: {exc}") from None
+        self._rx: list[tuple | None] = [None] * (MAILBOX_FRAMES + 1)   # 1-based, bound lazily
+        self._tx: list[tuple | None] = [None] * (MAILBOX_FRAMES + 1)
+
+    def _bind(self, which: str, i: int) -> tuple:
+        var, p = self.plc.var, f"{self.path}.{which}[{i}]"
+        return (var(f"{p}.Id"), var(f"{p}.Dlc"), var(f"{p}.Rtr"), [var(f"{p}.Data[{j}]") for j in range(8)])
+
+    @property
+    def rx_count(self) -> int:
+        return self._rx_count.value
+
+    @property
+    def rx_lost(self) -> int:
+        return self._rx_lost.value
+
+    @property
+    def tx_lost(self) -> int:
+        return self._tx_lost.value
+
+    def write_rx(self, frames: list[Frame]) -> int:
+        """Rx[1..n] := frames (n <= 32), RxCount := n, RxLost += the surplus; returns the surplus."""
+        n = len(frames)
+        lost = 0
+        if n > MAILBOX_FRAMES:
+            lost, n = n - MAILBOX_FRAMES, MAILBOX_FRAMES
+            self._rx_lost.value = (self._rx_lost.value + lost) & 0xFFFFFFFF
+        rx = self._rx
+        for i in range(n):
+            slot = rx[i + 1] or self._bind_rx(i + 1)
+            frame = frames[i]
+            slot[0].value = frame.can_id
+            slot[1].value = len(frame.data)
+            slot[2].value = frame.rtr
+            data = frame.data
+            for j, byte_var in enumerate(slot[3]):
+                byte_var.value = data[j] if j < len(data) else 0
+        self._rx_count.value = n
+        return lost
+
+    def _bind_rx(self, i: int) -> tuple:
+        slot = self._rx[i] = self._bind("Rx", i)
+        return slot
+
+    def take_tx(self) -> list[Frame]:
+        """The frames Tx[1..TxCount], then TxCount := 0. Empty list if TxCount <= 0."""
+        n = self._tx_count.value
+        if n <= 0:
+            if n < 0:
+                self._tx_count.value = 0
+            return []
+        n = min(n, MAILBOX_FRAMES)
+        frames = []
+        tx = self._tx
+        for i in range(1, n + 1):
+            slot = tx[i]
+            if slot is None:
+                slot = tx[i] = self._bind("Tx", i)
+            can_id, dlc = slot[0].value, slot[1].value
+            if can_id > 0x7FF or dlc > 8:
+                self._tx_count.value = 0
+                raise CoSimError(f"{self.path}.Tx[{i}]: Id {can_id:#x} Dlc {dlc} is not a CAN 2.0A frame "
+                                 f"(Id 0..16#7FF, Dlc 0..8)")
+            data = bytes(slot[3][j].value for j in range(dlc)) if dlc else b""
+            frames.append(Frame(can_id, data, slot[2].value))
+        self._tx_count.value = 0
+        return frames
+
+
+class CoSim:
+    """A PLC stepped scan by scan against a SimBus; the PLC is the bus endpoint named `name`."""
+
+    def __init__(self, plc: Any, bus: Any, mailbox: str = "CONFIG0.RES0.CAN0", name: str = "plc") -> None:
+        self.plc = plc
+        self.bus = bus
+        self.mailbox = Mailbox(plc, mailbox)
+        self.endpoint = bus.endpoint(name)
+        self.scans = 0
+        self.frames_sent = 0
+        self.frames_received = 0
+        self.rx_dropped = 0   # frames that did not fit into Rx (also counted in the PLC's RxLost)
+
+    def step(self, n: int = 1) -> None:
+        """Run n scans."""
+        plc, bus, ep, mb = self.plc, self.bus, self.endpoint, self.mailbox
+        send = ep.send
+        for _ in range(n):
+            t = plc.time_ns
+            if t < bus.now:
+                raise CoSimError(f"PLC time {t} ns is behind the bus ({bus.now} ns): was the PLC reset?")
+            bus.run_until(t)
+            inbox = ep.inbox
+            if inbox:
+                ep.inbox = []
+                self.frames_received += len(inbox)
+                self.rx_dropped += mb.write_rx([f for _, f in inbox])
+            else:
+                mb._rx_count.value = 0
+            plc.step(1)
+            self.scans += 1
+            if mb._tx_count.value:
+                frames = mb.take_tx()
+                for f in frames:
+                    send(f, t)
+                self.frames_sent += len(frames)
+
+    def run_until(self, predicate: Callable[[], bool], max_scans: int) -> int:
+        """Step until predicate() is true (checked before each scan and after the last); returns the
+        scans run. Raises CoSimTimeout when it is still false after max_scans."""
+        for k in range(max_scans):
+            if predicate():
+                return k
+            self.step(1)
+        if predicate():
+            return max_scans
+        raise CoSimTimeout(f"condition not met within {max_scans} scans (PLC time {self.plc.time_ns} ns)")
+
+
+class RealTimeCoSim:
+    """A PLC stepped against the wall clock on a python-can bus (its own thread: the caller's).
+
+    Scan k of a `step`/`run_until` call starts when the wall clock has advanced as far as the PLC's
+    clock since the call began; the frames received meanwhile go into Rx. A scan that starts late
+    counts as an overrun (`overruns`, `max_lateness_ns`); later scans are not skipped.
+    """
+
+    def __init__(self, plc: Any, can_bus: Any, mailbox: str = "CONFIG0.RES0.CAN0", *,
+                 clock: Callable[[], int] = time.monotonic_ns) -> None:
+        self.plc = plc
+        self.can_bus = can_bus
+        self.mailbox = Mailbox(plc, mailbox)
+        self.clock = clock
+        self.scans = 0
+        self.frames_sent = 0
+        self.frames_received = 0
+        self.rx_dropped = 0
+        self.send_errors = 0
+        self.overruns = 0
+        self.max_lateness_ns = 0
+        self._pending: list[Frame] = []
+
+    def _collect(self, until_wall_ns: int) -> None:
+        bus, pending, clock = self.can_bus, self._pending, self.clock
+        while True:
+            remaining = until_wall_ns - clock()
+            msg = bus.recv(timeout=remaining / 1e9 if remaining > 0 else 0)
+            if msg is None:
+                if clock() >= until_wall_ns:
+                    return
+                continue
+            if msg.is_error_frame or msg.is_extended_id or getattr(msg, "is_fd", False):
+                continue
+            pending.append(Frame.from_message(msg))
+
+    def _scans(self, n: int | None, predicate: Callable[[], bool] | None, timeout_s: float | None) -> int:
+        plc, mb = self.plc, self.mailbox
+        wall0, plc0 = self.clock(), plc.time_ns
+        wall_end = None if timeout_s is None else wall0 + int(timeout_s * 1e9)
+        k = 0
+        while n is None or k < n:
+            if predicate is not None and predicate():
+                return k
+            due = wall0 + (plc.time_ns - plc0)
+            if wall_end is not None and due > wall_end:
+                break
+            self._collect(due)
+            late = self.clock() - due
+            if late > plc.tick_ns:
+                self.overruns += 1
+            self.max_lateness_ns = max(self.max_lateness_ns, late)
+            frames, self._pending = self._pending, []
+            self.frames_received += len(frames)
+            self.rx_dropped += mb.write_rx(frames)
+            plc.step(1)
+            self.scans += 1
+            k += 1
+            for f in mb.take_tx():
+                try:
+                    self.can_bus.send(f.to_message(timestamp=time.time()))
+                    self.frames_sent += 1
+                except Exception:  # noqa: BLE001 - a full Tx queue loses the frame, like a PLC driver would
+                    self.send_errors += 1
+        if predicate is not None:
+            if predicate():
+                return k
+            raise CoSimTimeout(f"condition not met within {k} scans")
+        return k
+
+    def step(self, n: int = 1) -> None:
+        """Run n scans in real time."""
+        self._scans(n, None, None)
+
+    def run_until(self, predicate: Callable[[], bool], max_scans: int | None = None,
+                  timeout_s: float | None = None) -> int:
+        """Step in real time until predicate() holds; CoSimTimeout after max_scans or timeout_s."""
+        if max_scans is None and timeout_s is None:
+            raise ValueError("give max_scans or timeout_s")
+        return self._scans(max_scans, predicate, timeout_s)

@@ -1,0 +1,229 @@
+"""CoSim (PLC mailbox <-> simulated bus) with a fake PLC that offers the loader's accessor API."""
+
+import re
+import time
+import uuid
+
+import pytest
+
+from linmot_st.bus import Frame, NodeServer, SimBus, open_bus
+from linmot_st.bus.bits import frame_length_bits
+from linmot_st.bus.nodes import EchoNode
+from linmot_st.cosim import CoSim, CoSimError, CoSimTimeout, RealTimeCoSim
+
+MB = "CONFIG0.RES0.CAN0"
+TICK = 1_000_000
+
+
+class FakeVar:
+    def __init__(self, store, key):
+        self.store, self.key = store, key
+
+    @property
+    def value(self):
+        return self.store[self.key]
+
+    @value.setter
+    def value(self, v):
+        self.store[self.key] = v
+
+
+class FakePlc:
+    """Variables of a T_CanMailbox in a dict; `program(plc)` runs once per scan."""
+
+    def __init__(self, program, tick_ns=TICK):
+        self.vars = {}
+        for box in ("RX", "TX"):
+            for i in range(1, 33):
+                self.vars.update({f"{MB}.{box}[{i}].ID": 0, f"{MB}.{box}[{i}].DLC": 0, f"{MB}.{box}[{i}].RTR": False})
+                self.vars.update({f"{MB}.{box}[{i}].DATA[{j}]": 0 for j in range(8)})
+        self.vars.update({f"{MB}.{n}": 0 for n in ("RXCOUNT", "RXLOST", "TXCOUNT", "TXLOST")})
+        self.program = program
+        self.time_ns = 0
+        self.tick_ns = tick_ns
+        self.scan_count = 0
+
+    def var(self, path):
+        key = re.sub(r"\s", "", path.upper())
+        if key not in self.vars:
+            raise KeyError(path)
+        return FakeVar(self.vars, key)
+
+    def __getitem__(self, path):
+        return self.var(path).value
+
+    def __setitem__(self, path, v):
+        self.var(path).value = v
+
+    def step(self, n=1):
+        for _ in range(n):
+            self.program(self)
+            self.scan_count += 1
+            self.time_ns += self.tick_ns
+
+    # helpers for the programs
+    def rx(self):
+        out = []
+        for i in range(1, self[f"{MB}.RXCOUNT"] + 1):
+            p = f"{MB}.RX[{i}]"
+            out.append(Frame(self[p + ".ID"], bytes(self[f"{p}.DATA[{j}]"] for j in range(self[p + ".DLC"])),
+                             self[p + ".RTR"]))
+        return out
+
+    def tx(self, frame):
+        n = self[f"{MB}.TXCOUNT"] + 1
+        p = f"{MB}.TX[{n}]"
+        self[p + ".ID"], self[p + ".DLC"], self[p + ".RTR"] = frame.can_id, frame.dlc, frame.rtr
+        for j, b in enumerate(frame.data):
+            self[f"{p}.DATA[{j}]"] = b
+        self[f"{MB}.TXCOUNT"] = n
+
+
+class Requester:
+    """Sends one request per `period` scans when no answer is outstanding; logs (scan, frames)."""
+
+    def __init__(self, request=Frame(0x601, bytes([0x40, 0x18, 0x10, 1, 0, 0, 0, 0])), count=1):
+        self.request, self.count = request, count
+        self.log = []
+        self.sent_at = []
+
+    def __call__(self, plc):
+        got = plc.rx()
+        if got:
+            self.log.append((plc.scan_count, got))
+        if len(self.sent_at) < self.count and (not self.sent_at or self.log):
+            if not self.sent_at or len(self.log) == len(self.sent_at):
+                plc.tx(self.request)
+                self.sent_at.append(plc.scan_count)
+
+
+def make(program, latency_ns=100_000, bitrate=500_000):
+    plc = FakePlc(program)
+    bus = SimBus(bitrate)
+    bus.attach(EchoNode(), "drive", latency_ns=latency_ns)
+    return plc, bus, CoSim(plc, bus, mailbox=MB)
+
+
+def test_request_in_scan_k_is_answered_in_scan_k_plus_1():
+    prog = Requester(count=3)
+    plc, bus, sim = make(prog)
+    sim.step(10)
+    assert prog.sent_at == [0, 1, 2]
+    assert [scan for scan, _ in prog.log] == [1, 2, 3]
+    assert prog.log[0][1] == [Frame(0x581, prog.request.data)]
+    assert bus.trace[0].start_ns == 0 and bus.trace[2].start_ns == TICK   # sent at the scan's time
+    assert plc[f"{MB}.TXCOUNT"] == 0 and sim.frames_sent == 3 and sim.frames_received == 3
+
+
+def test_reply_that_does_not_fit_one_interval_comes_a_scan_later():
+    frames_ns = 2 * frame_length_bits(Frame(0x601, bytes(8))) * 2000
+    prog = Requester()
+    _, _, sim = make(prog, latency_ns=TICK - frames_ns + 50_000)
+    sim.step(5)
+    assert [scan for scan, _ in prog.log] == [2]
+
+
+def test_frames_ending_exactly_at_scan_time_are_delivered():
+    req = Frame(0x601, bytes(8))
+    prog = Requester(req)
+    # the request ends at L_req bits, the reply is ready `latency` later and ends exactly at t = 1 ms
+    latency = TICK - (frame_length_bits(req) + frame_length_bits(Frame(0x581, req.data))) * 2000
+    _, bus, sim = make(prog, latency_ns=latency)
+    sim.step(3)
+    assert bus.trace[1].end_ns == TICK and [scan for scan, _ in prog.log] == [1]
+
+
+def test_rx_overflow_counts_rx_lost():
+    def burst(plc):
+        if plc.scan_count == 0:
+            for k in range(32):
+                plc.tx(Frame(0x601, bytes([k])))
+    prog_log = []
+
+    def program(plc):
+        burst(plc)
+        if plc[f"{MB}.RXCOUNT"]:
+            prog_log.append(plc.rx())
+
+    plc = FakePlc(program, tick_ns=50_000_000)
+    bus = SimBus(1_000_000)
+    bus.attach(EchoNode(), "drive")
+    bus.attach(EchoNode(0x601, 0x582), "drive2")   # two answers per request: 64 frames in one interval
+    sim = CoSim(plc, bus, mailbox=MB)
+    sim.step(3)
+    assert [len(x) for x in prog_log] == [32]
+    assert plc[f"{MB}.RXLOST"] == sim.rx_dropped == 32
+    assert [f.data[0] for f in prog_log[0]][:3] == [0, 0, 1]   # delivery order: 581 00, 582 00, 581 01
+
+
+def test_tx_order_and_rtr_and_short_dlc():
+    frames = [Frame(0x700, b"\x01\x02"), Frame(0x100, b""), Frame(0x701, b"", rtr=True)]
+
+    def program(plc):
+        if plc.scan_count == 0:
+            for f in frames:
+                plc.tx(f)
+    plc = FakePlc(program)
+    bus = SimBus()
+    sim = CoSim(plc, bus, mailbox=MB)
+    sim.step(2)
+    # one participant, one transmit queue: Tx[1..n] go out in order
+    assert [e.frame for e in bus.trace] == frames
+
+
+def test_invalid_tx_frame_is_an_error():
+    def program(plc):
+        plc.tx(Frame(0x601, b""))
+        plc[f"{MB}.TX[1].ID"] = 0x800
+    plc = FakePlc(program)
+    sim = CoSim(plc, SimBus(), mailbox=MB)
+    with pytest.raises(CoSimError, match="TX\\[1\\]|Tx\\[1\\]"):
+        sim.step(1)
+
+
+def test_bad_mailbox_path():
+    with pytest.raises(KeyError, match="T_CanMailbox"):
+        CoSim(FakePlc(lambda p: None), SimBus(), mailbox="NOPE")
+
+
+def test_run_until():
+    prog = Requester(count=5)
+    _, _, sim = make(prog)
+    assert sim.run_until(lambda: len(prog.log) == 5, max_scans=100) == 6
+    with pytest.raises(CoSimTimeout):
+        sim.run_until(lambda: False, max_scans=10)
+
+
+def test_plc_behind_the_bus_is_an_error():
+    plc, bus, sim = make(Requester())
+    bus.run_until(5 * TICK)
+    with pytest.raises(CoSimError, match="behind"):
+        sim.step(1)
+
+
+def test_real_time_cosim_on_a_virtual_bus():
+    channel = f"linmot-st-test-{uuid.uuid4().hex}"
+    prog = Requester(count=10)
+    plc = FakePlc(prog)
+    with open_bus(f"virtual:{channel}") as served, open_bus(f"virtual:{channel}") as plc_bus:
+        with NodeServer(EchoNode(), served):
+            sim = RealTimeCoSim(plc, plc_bus, mailbox=MB)
+            t0 = time.monotonic()
+            scans = sim.run_until(lambda: len(prog.log) == 10, timeout_s=2.0)
+            wall = time.monotonic() - t0
+    assert len(prog.log) == 10 and prog.log[0][1] == [Frame(0x581, prog.request.data)]
+    assert scans >= 11
+    assert wall >= (scans - 1) * TICK / 1e9 * 0.9   # paced by the wall clock, not run flat out
+    with pytest.raises(ValueError):
+        sim.run_until(lambda: True)
+
+
+def test_real_time_cosim_step_paces_scans():
+    channel = f"linmot-st-test-{uuid.uuid4().hex}"
+    plc = FakePlc(lambda p: None, tick_ns=5_000_000)
+    with open_bus(f"virtual:{channel}") as bus:
+        sim = RealTimeCoSim(plc, bus, mailbox=MB)
+        t0 = time.monotonic()
+        sim.step(11)
+        assert time.monotonic() - t0 >= 0.049
+        assert sim.scans == 11 and plc.time_ns == 55_000_000
