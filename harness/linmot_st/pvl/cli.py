@@ -1,0 +1,50 @@
+"""`linmot-st pvl ...`: commands on PVL files.
+
+Each command is one entry of `COMMANDS`: (name, module-level function that adds its arguments, function
+that runs it). `pvl to-st` (ST data for the PLC) is added here by the ST data generator, as one more entry.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+
+def _add_show(p: argparse.ArgumentParser) -> None:
+    p.add_argument("file", metavar="FILE", help="a .pvl file")
+    p.add_argument("-v", "--verbose", action="store_true",
+                   help="list every parameter row (stringlets too), curve unit IDs and wizard data, CT parameters")
+
+
+def _run_show(args: argparse.Namespace) -> int:
+    from .errors import PvlError
+    from .parser import load_pvl
+    from .show import summary
+
+    try:
+        pvl = load_pvl(args.file)
+    except PvlError as err:
+        print(err, file=sys.stderr)
+        print(f"{args.file}: {len(err.diagnostics)} error(s)", file=sys.stderr)
+        return 1
+    except OSError as err:
+        print(f"{args.file}: {err.strerror or err}", file=sys.stderr)
+        return 1
+    sys.stdout.write(summary(pvl, verbose=args.verbose))
+    return 0
+
+
+COMMANDS = [
+    ("show", "print a readable summary of a PVL file (errors as file:line messages)", _add_show, _run_show),
+]
+
+
+def register(subparsers) -> None:
+    parser = subparsers.add_parser("pvl", help="LinMot PVL files: show, ...",
+                                   description="Commands on LinMot PVL (Parameter Value List) files.")
+    sub = parser.add_subparsers(dest="pvl_command", metavar="PVL_COMMAND")
+    for name, help_text, add_arguments, run in COMMANDS:
+        p = sub.add_parser(name, help=help_text, description=help_text)
+        add_arguments(p)
+        p.set_defaults(func=run)
+    parser.set_defaults(func=lambda args: (parser.print_help(), 2)[1])
