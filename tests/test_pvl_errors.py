@@ -266,7 +266,7 @@ def _model_errors(pvl: PvlFile) -> list[str]:
     return info.value.messages
 
 
-MC = demo.mc_parameters(2)
+MC = demo.mc_parameters((0x1194, 0x11A0))
 
 
 @pytest.mark.parametrize("obj,pattern", [

@@ -7,8 +7,8 @@ checked against the files by the tests (`python -m linmot_st.pvl.demo examples/`
 - two_axes.pvl: what `make demo` commissions onto each of two axes.
 
 The MC parameter UPIDs other than 1194h (Motor Type, from the seeds) are not from a LinMot source:
-they are plausible UPIDs of the MC layer range 1000h..1EFFh, shared with the emulated drive's
-default parameter set.
+they are the invented UPIDs of the emulated drive's parameter table (emulator/data/), which lie in the
+MC layer range 1000h..1EFFh.
 """
 
 from __future__ import annotations
@@ -31,23 +31,28 @@ CONTROLLER_NAME_UPID = 0x03E8      # stringlets 03E9h..03F0h (seeds Figure 13)
 USER_COMMENT_UPID = 0x03F2         # stringlets 03F3h..03FAh (seeds Figure 4 / Table 1)
 STRINGLETS_PER_STRING = 8
 
-# (UPID, raw value, caption, scaled value) -- see the module docstring about their origin
+# (UPID, raw value, caption, scaled value) -- see the module docstring about their origin. The UPIDs,
+# captions and limits follow the emulated drive's parameter table (emulator/data/e1100_parameters.csv);
+# every value differs from that table's default, so commissioning has something to change.
 MC_PARAMETERS = [
+    (0x1005, 0x000005DC, r"Motion Control SW\Drive Configuration\Power Bridge\Max Current Limit", "1.5 A"),
     (0x1194, 0x00000002, r"Motion Control SW\Motor Configuration\Motor Type", "P01"),
-    (0x1385, 0x00000BB8, r"Motion Control SW\Drive Configuration\Current Limits\Max Current", "3 A"),
-    (0x1390, 0x0000C350, r"Motion Control SW\Drive Configuration\Monitoring\Max Pos Following Error", "5 mm"),
-    (0x13A0, 0x000001C2, r"Motion Control SW\Drive Configuration\Position Controller\Set A\P Gain", "0.45 A/mm"),
-    (0x13A1, 0x00000005, r"Motion Control SW\Drive Configuration\Position Controller\Set A\D Gain", "0.005 A/(m/s)"),
-    (0x13A2, 0x00000064, r"Motion Control SW\Drive Configuration\Position Controller\Set A\FF Friction", "0.1 A"),
-    (0x13A3, 0x000000C8, r"Motion Control SW\Drive Configuration\Position Controller\Set A\FF Acceleration", "0.2 A/(m/s^2)"),
-    (0x1440, 0x00000000, r"Motion Control SW\State Machine Setup\Homing\Home Position", "0 mm"),
-    (0x1441, 0x00000003, r"Motion Control SW\State Machine Setup\Homing\Mode", "Mech Stop Negative"),
-    (0x1442, 0x000186A0, r"Motion Control SW\State Machine Setup\Homing\Initial Position", "10 mm"),
-    (0x14A0, 0x000F4240, r"Motion Control SW\Motion Interface\VA Interpolator\Max Velocity", "1 m/s"),
-    (0x14B0, 0xFFFE7960, r"Motion Control SW\Drive Configuration\Position Range\Min Position", "-10 mm"),
-    (0x14B1, 0x001E8480, r"Motion Control SW\Drive Configuration\Position Range\Max Position", "200 mm"),
+    (0x11A0, 0x000004B0, r"Motion Control SW\Motor Configuration\Max Current", "1.2 A"),
+    (0x1390, 0x00004E20, r"Motion Control SW\Position Controller\Position Lag Always Warn Level", "2 mm"),
+    (0x1391, 0x0000C350, r"Motion Control SW\Position Controller\Position Lag Always Error Level", "5 mm"),
+    (0x13A2, 0x0000000C, r"Motion Control SW\Position Controller\Control Parameter Set A\P Gain", "0.12 A/mm"),
+    (0x13A3, 0x00000003, r"Motion Control SW\Position Controller\Control Parameter Set A\D Gain", "0.03 A/(m/s)"),
+    (0x13A5, 0x00000064, r"Motion Control SW\Position Controller\Control Parameter Set A\FF Friction", "0.1 A"),
+    (0x14A0, 0x0016E360, r"Motion Control SW\Motion Interface\Predefined VA Interpolator\Maximal Velocity", "1.5 m/s"),
+    (0x14A1, 0x001E8480, r"Motion Control SW\Motion Interface\Predefined VA Interpolator\Acceleration", "20 m/s^2"),
+    (0x1500, 0x00000003, r"Motion Control SW\State Machine Setup\Homing\Mode", "Mech Stop Negative Search"),
+    (0x1502, 0x0000C350, r"Motion Control SW\State Machine Setup\Homing\Initial Position", "5 mm"),
+    (0x1600, 0x001E8480, r"Motion Control SW\Position Limits\Positive Limit", "200 mm"),
+    (0x1601, 0xFFFE7960, r"Motion Control SW\Position Limits\Negative Limit", "-10 mm"),
 ]
-SEED_MC_ROWS = 6   # seed_parameters.pvl keeps Motor Type and adds the next five rows
+
+# seed_parameters.pvl: the seeds' Motor Type row, then the next five rows of MC_PARAMETERS
+SEED_MC_UPIDS = (0x1194, 0x11A0, 0x1390, 0x1391, 0x13A2, 0x13A3)
 
 SEED_CURVE_INFO_WORDS = (0x00030046, 0x0004000A, 0x6D617845, 0x5F656C70, 0x76727543, 0x00000065,
                          0x00000000, 0x00170000, 0x00004E20, 0x0005001A, 0x4E200301, 0x00000000,
@@ -69,8 +74,8 @@ def os_parameters(controller_name: str, user_comment: str) -> ParameterObject:
     return ParameterObject(**OS_TREE, parameters=tuple(rows))
 
 
-def mc_parameters(count: int | None = None) -> ParameterObject:
-    rows = MC_PARAMETERS[:count] if count else MC_PARAMETERS
+def mc_parameters(upids=None) -> ParameterObject:
+    rows = [r for r in MC_PARAMETERS if upids is None or r[0] in upids]
     return ParameterObject(**MC_TREE, parameters=tuple(Parameter(*r) for r in rows))
 
 
@@ -104,7 +109,7 @@ def vai_go_to_pos(entry_id: int, name: str, position: int, velocity: int, accele
 
 
 def seed_parameters_file() -> PvlFile:
-    return PvlFile((os_parameters("MyController", "X Axis Left"), mc_parameters(SEED_MC_ROWS)))
+    return PvlFile((os_parameters("MyController", "X Axis Left"), mc_parameters(SEED_MC_UPIDS)))
 
 
 def seed_curve_file() -> PvlFile:
