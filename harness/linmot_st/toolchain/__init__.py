@@ -1,0 +1,212 @@
+"""ST -> C -> shared library, with MatIEC's iec2c or the builtin compiler, cached by content.
+
+    from linmot_st.toolchain import build
+    res = build("plc_project", backend="auto")   # res.library, res.manifest, res.backend, res.cached
+
+See docs/architecture.md section 1 and docs/toolchain.md.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from . import cache as _cache
+from . import cc, sources as _sources
+
+BACKENDS = ("auto", "matiec", "builtin")
+_TOOLCHAIN_DIR = Path(__file__).parent
+
+
+class CompileError(Exception):
+    """The sources do not compile. `diagnostics` holds `file:line:col: error: message` lines."""
+
+    def __init__(self, diagnostics: list[str] | str, backend: str = ""):
+        if isinstance(diagnostics, str):
+            diagnostics = diagnostics.splitlines() or [diagnostics]
+        self.diagnostics = list(diagnostics)
+        self.backend = backend
+        super().__init__("\n".join(self.diagnostics))
+
+
+@dataclass
+class BuildResult:
+    library: Path
+    manifest: Path
+    backend: str
+    cached: bool
+    entry: Path
+    root: Path
+    seconds: float = 0.0
+    backend_version: str = ""
+    warnings: list[str] = field(default_factory=list)
+    c_dir: Path | None = None     # the generated C, kept for reading
+
+
+def matiec_available() -> bool:
+    from . import matiec
+    return matiec.find() is not None
+
+
+def builtin_available() -> bool:
+    try:
+        from .builtin import compile_to_c  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def choose_backend(backend: str = "auto") -> str:
+    """`auto` is matiec when iec2c is found, else builtin."""
+    if backend not in BACKENDS:
+        raise ValueError(f"unknown backend {backend!r}: choose one of {', '.join(BACKENDS)}")
+    if backend != "auto":
+        return backend
+    return "matiec" if matiec_available() else "builtin"
+
+
+def _code_digest(paths: list[Path]) -> str:
+    h = hashlib.sha256()
+    for p in sorted(paths):
+        h.update(p.name.encode() + b"\0" + p.read_bytes())
+    return h.hexdigest()
+
+
+def build(path: str | os.PathLike, backend: str = "auto", out: str | os.PathLike | None = None, *,
+          cache_dir: str | os.PathLike | None = None, use_cache: bool = True) -> BuildResult:
+    """Build a .st file or a project folder (its plc.st) into a shared library and its manifest."""
+    t0 = time.perf_counter()
+    chosen = choose_backend(backend)
+    try:
+        src = _sources.collect(path)
+    except _sources.SourceError as exc:
+        raise CompileError([f"{path}:1:1: error: {exc}"], chosen) from None
+
+    if chosen == "matiec":
+        from . import matiec
+        tool = matiec.find()
+        if tool is None:
+            raise CompileError([f"{src.entry}:1:1: error: backend matiec: iec2c not found "
+                                f"(set IEC2C or MATIEC_HOME, or put iec2c on PATH)"], chosen)
+        backend_version = matiec.version(tool)
+        generator = [_TOOLCHAIN_DIR / "matiec.py", _TOOLCHAIN_DIR / "st_decls.py"]
+        flags = list(matiec.flags(tool.iec2c)) + cc.bounds_trap_flags()
+    else:
+        tool = None
+        try:
+            from . import builtin
+        except ImportError as exc:
+            raise CompileError([f"{src.entry}:1:1: error: the builtin compiler is not available: {exc}"],
+                               chosen) from None
+        builtin_dir = Path(builtin.__file__).parent
+        generator = [p for p in builtin_dir.rglob("*") if p.suffix in (".py", ".lark", ".c", ".h")]
+        backend_version = getattr(builtin, "__version__", "") or _code_digest(generator)[:16]
+        flags = []
+
+    key = _cache.make_key({
+        "backend": chosen,
+        "backend_version": backend_version,
+        "generator": _code_digest(generator + [_TOOLCHAIN_DIR / "cc.py"]),
+        "cc": cc.find_compiler().version,
+        "cflags": cc.BASE_FLAGS + cc.LINK_FLAGS + flags,
+        "glue": _code_digest(cc.GLUE_SOURCES),
+        "entry": src.entry_rel,
+        "root": str(src.root),
+        "sources": {_sources.rel_name(f, src.root): _cache.file_digest(f) for f in src.files},
+        "missing": src.missing,
+    })
+    store = _cache.Cache(Path(cache_dir) if cache_dir else _cache.default_dir(src.root))
+    entry = store.lookup(key) if use_cache else None
+    cached = entry is not None
+    if entry is None:
+        entry = _compile(chosen, tool, src, store, key, backend_version)
+    manifest = json.loads((entry / _cache.MANIFEST_NAME).read_text())
+    result = BuildResult(entry / _cache.LIBRARY_NAME, entry / _cache.MANIFEST_NAME, chosen, cached, src.entry,
+                         src.root, backend_version=backend_version, warnings=manifest.get("warnings", []),
+                         c_dir=entry / "c")
+    if out is not None:
+        result = _export(result, Path(out))
+    result.seconds = time.perf_counter() - t0
+    return result
+
+
+def _compile(chosen: str, tool, src: _sources.Sources, store: _cache.Cache, key: str,
+             backend_version: str) -> Path:
+    staging = store.staging()
+    try:
+        c_dir = staging / "c"
+        c_dir.mkdir()
+        if chosen == "matiec":
+            from . import matiec
+            try:
+                manifest, units, plain_units = matiec.generate(tool, src, c_dir, backend_version)
+            except matiec.MatiecError as exc:
+                raise CompileError(exc.diagnostics, chosen) from None
+            trap = cc.bounds_trap_flags()
+            unit_flags = {u: trap for u in units}
+            all_units = units + plain_units
+            include_dirs = [c_dir, tool.include]
+            read = list(src.files)
+        else:
+            manifest, all_units, read = _builtin_generate(src, c_dir)
+            unit_flags, include_dirs = {}, [c_dir]
+        (staging / _cache.MANIFEST_NAME).write_text(json.dumps(manifest, indent=1))
+        try:
+            cc.compile_shared(all_units + cc.GLUE_SOURCES, staging / _cache.LIBRARY_NAME,
+                              include_dirs=include_dirs, unit_flags=unit_flags, cwd=src.root)
+        except cc.CCompileError as exc:
+            diags = exc.diagnostics or [f"{src.entry_rel}:1:1: error: {exc}"]
+            raise CompileError(diags + ["(the C compiler rejected the generated C)", str(exc)], chosen) from None
+        for o in staging.glob("*.o"):
+            o.unlink()
+        meta = {"backend": chosen, "backend_version": backend_version, "entry": str(src.entry),
+                "sources_read": {str(p): _cache.file_digest(p) for p in read}}
+        return store.commit(key, staging, meta)
+    except BaseException:
+        store.discard(staging)
+        raise
+
+
+def _builtin_generate(src: _sources.Sources, c_dir: Path) -> tuple[dict, list[Path], list[Path]]:
+    """Run the builtin compiler; returns (manifest, C units, sources it read)."""
+    from . import builtin
+    error_cls = getattr(builtin, "BuiltinCompileError", ())
+    try:
+        out = builtin.compile_to_c(src.entry, src.root, c_dir)
+    except Exception as exc:
+        if error_cls and isinstance(exc, error_cls):
+            raise CompileError(list(getattr(exc, "diagnostics", None) or str(exc).splitlines()), "builtin") from None
+        raise
+    manifest = getattr(out, "manifest", None)
+    if isinstance(manifest, (str, Path)):
+        manifest = json.loads(Path(manifest).read_text())
+    if manifest is None:
+        manifest = json.loads((c_dir / "manifest.json").read_text())
+    units = getattr(out, "c_files", None) or getattr(out, "c_sources", None) or sorted(c_dir.glob("*.c"))
+    units = [Path(u) if Path(u).is_absolute() else c_dir / u for u in units]
+    read = [Path(p) for p in (getattr(out, "sources", None) or src.files)]
+    return manifest, units, read
+
+
+def _export(result: BuildResult, out: Path) -> BuildResult:
+    """Copy the library, its manifest and the generated C into `out`."""
+    out.mkdir(parents=True, exist_ok=True)
+    shutil.copyfile(result.library, out / result.library.name)
+    shutil.copyfile(result.manifest, out / result.manifest.name)
+    if result.c_dir and result.c_dir.is_dir():
+        shutil.copytree(result.c_dir, out / "c", dirs_exist_ok=True)
+    result.library, result.manifest, result.c_dir = out / result.library.name, out / result.manifest.name, out / "c"
+    return result
+
+
+def say(message: str) -> None:
+    print(message, file=sys.stderr)
+
+
+__all__ = ["build", "BuildResult", "CompileError", "choose_backend", "matiec_available", "builtin_available"]

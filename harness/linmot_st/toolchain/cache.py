@@ -1,0 +1,90 @@
+"""The content-addressed build cache.
+
+An entry is a folder named by the SHA-256 of everything a build depends on: the content of each source
+read (entry file and includes), the backend and its version, the C compiler and its flags, the glue
+sources and the code of the toolchain that generates C. A build writes into a private staging folder and
+renames it into place, so concurrent builders (pytest -n 2) never see half an entry.
+
+The key is computed from the sources found by scanning `{#include}` pragmas. The backend also reports
+what it actually read; those files and their hashes are stored in the entry and checked on a hit, so a
+source the scan missed still invalidates the entry.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+import tempfile
+from pathlib import Path
+
+KEY_VERSION = "linmot-st-cache-1"
+LIBRARY_NAME = "libplc.so"
+MANIFEST_NAME = "manifest.json"
+META_NAME = "meta.json"
+
+
+def default_dir(root: Path) -> Path:
+    env = os.environ.get("LINMOT_ST_CACHE")
+    return Path(env).expanduser() if env else root / "build" / "cache"
+
+
+def file_digest(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def make_key(parts: dict) -> str:
+    blob = json.dumps({"version": KEY_VERSION, **parts}, sort_keys=True).encode()
+    return hashlib.sha256(blob).hexdigest()
+
+
+class Cache:
+    def __init__(self, folder: Path):
+        self.folder = folder
+
+    def entry(self, key: str) -> Path:
+        return self.folder / key[:2] / key
+
+    def lookup(self, key: str) -> Path | None:
+        """The entry folder if it is complete and every source it recorded is unchanged."""
+        entry = self.entry(key)
+        meta_path = entry / META_NAME
+        try:
+            meta = json.loads(meta_path.read_text())
+        except (OSError, ValueError):
+            return None
+        if not (entry / LIBRARY_NAME).is_file() or not (entry / MANIFEST_NAME).is_file():
+            return None
+        for path, digest in meta.get("sources_read", {}).items():
+            p = Path(path)
+            try:
+                if file_digest(p) != digest:
+                    return None
+            except OSError:
+                return None
+        return entry
+
+    def staging(self) -> Path:
+        self.folder.mkdir(parents=True, exist_ok=True)
+        return Path(tempfile.mkdtemp(prefix="staging-", dir=self.folder))
+
+    def commit(self, key: str, staging: Path, meta: dict) -> Path:
+        (staging / META_NAME).write_text(json.dumps(meta, indent=1, sort_keys=True))
+        entry = self.entry(key)
+        entry.parent.mkdir(parents=True, exist_ok=True)
+        if entry.exists():   # stale (sources changed behind the key) or a concurrent builder won
+            old = entry.with_name(entry.name + f".old-{os.getpid()}-{id(staging)}")
+            try:
+                os.rename(entry, old)
+                shutil.rmtree(old, ignore_errors=True)
+            except OSError:
+                pass
+        try:
+            os.rename(staging, entry)
+        except OSError:   # a concurrent builder committed the same key first: use theirs
+            shutil.rmtree(staging, ignore_errors=True)
+        return entry
+
+    def discard(self, staging: Path) -> None:
+        shutil.rmtree(staging, ignore_errors=True)

@@ -1,0 +1,237 @@
+/* The shared glue of every built PLC library (docs/architecture.md 1.2, 1.3).
+ *
+ * Both backends generate C that provides MatIEC's runtime contract (config_init__, config_run__,
+ * common_ticktime__) plus the tables plc_root_addr/plc_type_size. This file adds the rest: the virtual
+ * clock __CURRENT_TIME, the scan loop in C, and PLC fault capture.
+ *
+ * It includes no MatIEC header on purpose: the builtin backend must build where MatIEC is absent.
+ * IEC_TIME's layout ({long tv_sec; long tv_nsec;}) is restated here.
+ *
+ * Faults. The builtin backend checks divisions and indices itself and calls plc_raise_fault(). C compiled
+ * by iec2c does not: there an integer division by zero raises SIGFPE and an index out of range traps
+ * (the backend compiles it with a trapping bounds sanitizer: SIGILL). The handlers below turn such a
+ * signal, raised by this thread inside plc_step/plc_init, into a siglongjmp back to the loop. A signal
+ * raised anywhere else is passed on to the handler that was installed before ours (pytest's
+ * faulthandler, Python's default, or another PLC instance's glue).
+ */
+#define _GNU_SOURCE
+#include <dlfcn.h>
+#include <pthread.h>
+#include <setjmp.h>
+#include <signal.h>
+#include <stdlib.h>
+#include <string.h>
+#include <ucontext.h>
+
+#define PLC_ABI_VERSION 1
+
+typedef struct { long tv_sec; long tv_nsec; } plc_iec_time_t;   /* MatIEC's IEC_TIME */
+
+/* provided by the generated C */
+extern void config_init__(void);
+extern void config_run__(unsigned long tick);
+extern unsigned long long common_ticktime__;
+
+/* read by every TON/TOF/TP of the generated code; advanced after each scan */
+plc_iec_time_t __CURRENT_TIME;
+
+static unsigned long plc_tick;
+static unsigned long long plc_now_ns;
+static unsigned long long plc_scans;
+
+static int fault_kind;
+static char fault_pou[128];
+static char fault_file[256];
+static int fault_line;
+static unsigned long fault_pc;
+
+/* the scan in progress, if any; guarded by the thread that runs it */
+static volatile sig_atomic_t in_scan;
+static pthread_t scan_thread;
+static sigjmp_buf scan_jmp;
+
+#define N_SIGNALS 4
+static const int caught_signals[N_SIGNALS] = {SIGFPE, SIGILL, SIGSEGV, SIGBUS};
+static struct sigaction previous[N_SIGNALS];
+static int handlers_installed;
+
+__attribute__((visibility("default"))) int plc_abi_version(void) { return PLC_ABI_VERSION; }
+
+static void set_clock(unsigned long long t)
+{
+    plc_now_ns = t;
+    __CURRENT_TIME.tv_sec = (long)(t / 1000000000ULL);
+    __CURRENT_TIME.tv_nsec = (long)(t % 1000000000ULL);
+}
+
+static void copy_str(char *dst, size_t size, const char *src)
+{
+    size_t i = 0;
+    if (src)
+        for (; src[i] && i + 1 < size; i++) dst[i] = src[i];
+    dst[i] = '\0';
+}
+
+static void upper_case(char *s)
+{
+    for (; *s; s++)
+        if (*s >= 'a' && *s <= 'z') *s = (char)(*s - 'a' + 'A');
+}
+
+static void clear_fault(void)
+{
+    fault_kind = 0;
+    fault_pou[0] = fault_file[0] = '\0';
+    fault_line = 0;
+    fault_pc = 0;
+}
+
+/* A POU name from the symbol that holds pc: MatIEC names FB and program bodies <POU>_body__,
+ * FB initialisers <POU>_init__ and FUNCTIONs after the POU itself. The loader refines this from debug
+ * information where it can (an inlined body has no symbol of its own). */
+static void locate_pc(unsigned long pc)
+{
+    Dl_info info;
+    if (!pc || !dladdr((void *)pc, &info)) return;
+    fault_pc = pc - (unsigned long)info.dli_fbase;
+    if (!info.dli_sname) return;
+    copy_str(fault_pou, sizeof fault_pou, info.dli_sname);
+    char *suffix = strstr(fault_pou, "_body__");
+    if (!suffix) suffix = strstr(fault_pou, "_init__");
+    if (suffix) *suffix = '\0';
+    upper_case(fault_pou);
+}
+
+static unsigned long context_pc(void *ctx)
+{
+    ucontext_t *uc = (ucontext_t *)ctx;
+    if (!uc) return 0;
+#if defined(__x86_64__)
+    return (unsigned long)uc->uc_mcontext.gregs[REG_RIP];
+#elif defined(__i386__)
+    return (unsigned long)uc->uc_mcontext.gregs[REG_EIP];
+#elif defined(__aarch64__)
+    return (unsigned long)uc->uc_mcontext.pc;
+#else
+    return 0;
+#endif
+}
+
+static int kind_of(int sig, const siginfo_t *info)
+{
+    switch (sig) {
+    case SIGFPE: return (info && info->si_code == FPE_INTDIV) ? 1 : 3;
+    case SIGILL: return 2;   /* the trapping bounds sanitizer: the only source of SIGILL in PLC code */
+    default: return 4;
+    }
+}
+
+static void chain(int index, int sig, siginfo_t *info, void *ctx)
+{
+    struct sigaction *prev = &previous[index];
+    if (prev->sa_flags & SA_SIGINFO) {
+        if (prev->sa_sigaction) { prev->sa_sigaction(sig, info, ctx); return; }
+    } else if (prev->sa_handler != SIG_DFL && prev->sa_handler != SIG_IGN) {
+        prev->sa_handler(sig);
+        return;
+    }
+    /* default action: give the signal back to it; the faulting instruction runs again and ends the
+     * process as it would have without us (a fault is not ignorable) */
+    sigaction(sig, prev, NULL);
+    if (info && info->si_code <= 0) raise(sig);   /* sent by kill(), not a fault: re-send it */
+}
+
+static void on_signal(int sig, siginfo_t *info, void *ctx)
+{
+    int index = 0;
+    while (index < N_SIGNALS && caught_signals[index] != sig) index++;
+    if (in_scan && pthread_equal(pthread_self(), scan_thread) && info && info->si_code > 0) {
+        fault_kind = kind_of(sig, info);
+        locate_pc(context_pc(ctx));
+        in_scan = 0;
+        siglongjmp(scan_jmp, 1);
+    }
+    if (index < N_SIGNALS) chain(index, sig, info, ctx);
+}
+
+static void install_handlers(void)
+{
+    if (handlers_installed) return;
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_sigaction = on_signal;
+    sa.sa_flags = SA_SIGINFO | SA_NODEFER | SA_ONSTACK;
+    sigemptyset(&sa.sa_mask);
+    for (int i = 0; i < N_SIGNALS; i++) sigaction(caught_signals[i], &sa, &previous[i]);
+    handlers_installed = 1;
+}
+
+/* Called by code of the builtin backend at a checked fault; does not return. Outside a scan (which
+ * cannot happen for generated code) it records the fault and returns to nothing: abort is the only
+ * honest choice. */
+__attribute__((visibility("default"), noreturn))
+void plc_raise_fault(int kind, const char *pou, const char *file, int line)
+{
+    fault_kind = kind ? kind : 3;
+    copy_str(fault_pou, sizeof fault_pou, pou);
+    upper_case(fault_pou);
+    copy_str(fault_file, sizeof fault_file, file);
+    fault_line = line;
+    fault_pc = 0;
+    if (in_scan && pthread_equal(pthread_self(), scan_thread)) {
+        in_scan = 0;
+        siglongjmp(scan_jmp, 1);
+    }
+    abort();
+}
+
+__attribute__((visibility("default"))) void plc_init(void)
+{
+    install_handlers();
+    clear_fault();
+    plc_tick = 0;
+    plc_scans = 0;
+    set_clock(0);
+    scan_thread = pthread_self();
+    if (sigsetjmp(scan_jmp, 1) == 0) {
+        in_scan = 1;
+        config_init__();
+    }
+    in_scan = 0;
+}
+
+__attribute__((visibility("default"))) unsigned long plc_step(unsigned long n)
+{
+    /* Globals are in memory at every call of config_run__, so after a siglongjmp plc_scans tells how
+     * many scans completed; start is not modified after sigsetjmp, so it keeps its value. */
+    const unsigned long long start = plc_scans;
+    if (fault_kind) return 0;   /* a faulted PLC stays stopped until plc_init */
+    scan_thread = pthread_self();
+    if (sigsetjmp(scan_jmp, 1) == 0) {
+        in_scan = 1;
+        const long tick_ns = (long)common_ticktime__;
+        for (unsigned long i = 0; i < n; i++) {
+            config_run__(plc_tick++);
+            plc_scans++;
+            /* the clock advances incrementally: no 64-bit division per scan */
+            plc_now_ns += (unsigned long long)tick_ns;
+            __CURRENT_TIME.tv_nsec += tick_ns;
+            while (__CURRENT_TIME.tv_nsec >= 1000000000L) {
+                __CURRENT_TIME.tv_nsec -= 1000000000L;
+                __CURRENT_TIME.tv_sec++;
+            }
+        }
+    }
+    in_scan = 0;
+    return (unsigned long)(plc_scans - start);
+}
+
+__attribute__((visibility("default"))) int plc_fault_kind(void) { return fault_kind; }
+__attribute__((visibility("default"))) const char *plc_fault_pou(void) { return fault_pou; }
+__attribute__((visibility("default"))) const char *plc_fault_file(void) { return fault_file; }
+__attribute__((visibility("default"))) int plc_fault_line(void) { return fault_line; }
+__attribute__((visibility("default"))) unsigned long plc_fault_pc(void) { return fault_pc; }
+__attribute__((visibility("default"))) unsigned long long plc_time_ns(void) { return plc_now_ns; }
+__attribute__((visibility("default"))) void plc_set_time_ns(unsigned long long t) { set_clock(t); }
+__attribute__((visibility("default"))) unsigned long long plc_tick_ns(void) { return common_ticktime__; }
+__attribute__((visibility("default"))) unsigned long long plc_scan_count(void) { return plc_scans; }

@@ -1,0 +1,416 @@
+"""The MatIEC backend: iec2c turns the ST into C; this module describes that C's data layout.
+
+iec2c writes POUS.h (types, FB and program structs), Config0.c / Res*.c (globals, program instances),
+VARIABLES.csv (program instances, tick) and LOCATED_VARIABLES.h (located variables). From them this
+module generates `plc_tables.c` (located storage, `plc_root_addr`, `plc_type_size`) and the manifest
+(docs/architecture.md 1.1). LOCATED_VARIABLES.h is parsed, never #included: MatIEC HEAD writes bare
+VAR_GLOBAL names into it. iec2c's C loses array lower bounds and ST type names, which the declaration
+scanner (st_decls) recovers from the sources.
+"""
+
+from __future__ import annotations
+
+import csv
+import functools
+import hashlib
+import os
+import re
+import shutil
+import subprocess
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from . import st_decls
+from .sources import Sources
+
+NAME = "matiec"
+ELEMENTARY = {"BOOL", "SINT", "INT", "DINT", "LINT", "USINT", "UINT", "UDINT", "ULINT", "BYTE", "WORD",
+              "DWORD", "LWORD", "REAL", "LREAL", "TIME", "DATE", "TOD", "DT", "STRING"}
+WANTED_FLAGS = ("-f", "-l", "-p")   # as Beremiz: those of them that `iec2c -h` lists
+
+
+class MatiecError(Exception):
+    """iec2c rejected the sources (diagnostics: file:line:col: error: message lines) or its output is
+    not understood."""
+
+    def __init__(self, message: str, diagnostics: list[str] | None = None):
+        super().__init__(message)
+        self.diagnostics = diagnostics or [message]
+
+
+@dataclass(frozen=True)
+class Matiec:
+    iec2c: Path
+    lib: Path        # holds ieclib.txt; its C/ folder holds the headers
+
+    @property
+    def include(self) -> Path:
+        return self.lib / "C"
+
+
+def find() -> Matiec | None:
+    """iec2c from $IEC2C, $MATIEC_HOME/iec2c or PATH; its lib folder from $MATIEC_HOME/lib or beside it."""
+    candidates = []
+    if os.environ.get("IEC2C"):
+        candidates.append(Path(os.environ["IEC2C"]))
+    home = os.environ.get("MATIEC_HOME")
+    if home:
+        candidates.append(Path(home) / "iec2c")
+    on_path = shutil.which("iec2c")
+    if on_path:
+        candidates.append(Path(on_path))
+    for c in candidates:
+        if c.is_file() and os.access(c, os.X_OK):
+            exe = c.resolve()
+            libs = ([Path(home) / "lib"] if home else []) + [c.parent / "lib", exe.parent / "lib"]
+            for lib in libs:
+                if (lib / "ieclib.txt").is_file():
+                    return Matiec(exe, lib.resolve())
+    return None
+
+
+@functools.lru_cache(maxsize=None)
+def flags(iec2c: Path) -> tuple[str, ...]:
+    """Beremiz's choice: whichever of -f -l -p the help lists; plus `-O l` (#line directives into the
+    ST files, so gcc errors and the debug line table point at ST lines) when listed."""
+    proc = subprocess.run([str(iec2c), "-h"], capture_output=True, text=True, check=False)
+    help_text = proc.stdout + proc.stderr
+    chosen = [f for f in WANTED_FLAGS if re.search(rf"^\s*{f}\b", help_text, re.M)]
+    if re.search(r"^\s*-O\b", help_text, re.M) and re.search(r"^\s*l\s*:", help_text, re.M):
+        chosen += ["-O", "l"]
+    return tuple(chosen)
+
+
+def version(m: Matiec) -> str:
+    """Identity of the compiler for the cache key: its binary and library, by content."""
+    h = hashlib.sha256()
+    for p in [m.iec2c, *sorted(m.lib.glob("*.txt")), *sorted(m.include.glob("*.h"))]:
+        st = p.stat()
+        h.update(f"{p}:{st.st_size}:{st.st_mtime_ns};".encode())
+    return f"iec2c {m.iec2c} {h.hexdigest()[:16]}"
+
+
+_ERROR = re.compile(r"^(?P<file>.*?):(?P<line>\d+)-(?P<col>\d+)(?:\.\.\d+-\d+)?: (?P<sev>error|warning): (?P<msg>.*)$")
+
+
+def diagnostics_from(stderr: str, entry: str, rc: int) -> list[str]:
+    """iec2c's `file:l-c..l-c: error: msg` as `file:l:c: error: msg`; anything else it says is attached to
+    the entry file, since it names no position."""
+    out: list[str] = []
+    for raw in stderr.splitlines():
+        line = raw.strip()
+        if not line or re.match(r"^\d+ error\(s\) found", line):
+            continue
+        m = _ERROR.match(line)
+        if m:
+            if m["sev"] == "error":
+                out.append(f"{m['file']}:{m['line']}:{m['col']}: error: {m['msg']}")
+        else:
+            out.append(f"{entry}:1:1: error: iec2c: {line}")
+    if rc < 0 or rc >= 128:
+        sig = -rc if rc < 0 else rc - 128
+        out.append(f"{entry}:1:1: error: iec2c crashed (signal {sig}); MatIEC does this after some syntax "
+                   f"errors, e.g. a reserved word (a standard function or type name) used as an identifier")
+    if not out:
+        out.append(f"{entry}:1:1: error: iec2c failed with exit code {rc}")
+    return out
+
+
+def run_iec2c(m: Matiec, sources: Sources, out_dir: Path) -> list[Path]:
+    """Compile the entry file into out_dir; returns the generated files iec2c lists."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    argv = [str(m.iec2c), *flags(m.iec2c), "-I", str(m.lib), "-T", str(out_dir), sources.entry_rel]
+    proc = subprocess.run(argv, cwd=sources.root, capture_output=True, text=True, check=False)
+    if proc.returncode != 0:
+        diags = diagnostics_from(proc.stderr + ("\n" + proc.stdout if proc.returncode != 1 else ""),
+                                 sources.entry_rel, proc.returncode)
+        raise MatiecError("\n".join(diags), diags)
+    files = [out_dir / line.strip() for line in proc.stdout.splitlines() if line.strip()]
+    missing = [f.name for f in files if not f.is_file()]
+    if missing or not files:
+        raise MatiecError(f"{sources.entry_rel}:1:1: error: iec2c reported success but wrote no "
+                          f"{', '.join(missing) or 'files'}")
+    return files
+
+
+# ---- what the generated C declares ----------------------------------------------------------------------
+
+@dataclass
+class CTypes:
+    arrays: dict[str, tuple[str, list[int]]] = field(default_factory=dict)     # name -> (base, sizes)
+    enums: dict[str, list[str]] = field(default_factory=dict)
+    structs: dict[str, list[tuple[str, str]]] = field(default_factory=dict)     # name -> [(ctype, member)]
+    derived: dict[str, str] = field(default_factory=dict)
+    pous: dict[str, list[tuple[str, str, str]]] = field(default_factory=dict)   # name -> [(how, ctype, member)]
+
+
+_LINE_DIRECTIVE = re.compile(r"^\s*#line\b.*$", re.M)
+_ARRAY = re.compile(r"__DECLARE_ARRAY_TYPE\(\s*(\w+)\s*,\s*(\w+)\s*,\s*((?:\[\s*\d+\s*\])+)\s*\)")
+_ENUM = re.compile(r"__DECLARE_ENUMERATED_TYPE\(\s*(\w+)\s*,(.*?)\)", re.S)
+_STRUCT = re.compile(r"__DECLARE_STRUCT_TYPE\(\s*(\w+)\s*,(.*?)\)", re.S)
+_DERIVED = re.compile(r"__DECLARE_DERIVED_TYPE\(\s*(\w+)\s*,\s*(\w+)\s*\)")
+_TYPEDEF_STRUCT = re.compile(r"typedef\s+struct\s*\{(.*?)\}\s*(\w+)\s*;", re.S)
+_MEMBER_MACRO = re.compile(r"^__DECLARE_(VAR|EXTERNAL|LOCATED|EXTERNAL_FB)\(\s*(\w+)\s*,\s*(\w+)\s*\)$")
+_MEMBER_PLAIN = re.compile(r"^(\w+)\s+(\w+)\s*;$")
+
+
+def parse_header(text: str, into: CTypes | None = None, origin: str = "POUS.h") -> CTypes:
+    ct = into or CTypes()
+    text = _LINE_DIRECTIVE.sub("", text)
+    text = re.sub(r"//[^\n]*", "", text)
+    for name, base, sizes in _ARRAY.findall(text):
+        ct.arrays[name] = (base, [int(s) for s in re.findall(r"\d+", sizes)])
+    for name, body in _ENUM.findall(text):
+        prefix = name + "__"
+        ct.enums[name] = [v.strip()[len(prefix):] if v.strip().startswith(prefix) else v.strip()
+                          for v in body.split(",") if v.strip()]
+    for name, body in _STRUCT.findall(text):
+        members = []
+        for decl in body.split(";"):
+            decl = decl.strip()
+            if decl:
+                m = _MEMBER_PLAIN.match(decl + ";")
+                if not m:
+                    raise MatiecError(f"{origin}: struct {name} has a member this backend does not "
+                                      f"understand: {decl!r}")
+                members.append((m[1], m[2]))
+        ct.structs[name] = members
+    for name, base in _DERIVED.findall(text):
+        ct.derived[name] = base
+    for body, name in _TYPEDEF_STRUCT.findall(text):
+        members = []
+        for raw in body.splitlines():
+            line = raw.strip()
+            if not line:
+                continue
+            m = _MEMBER_MACRO.match(line)
+            if m:
+                members.append((m[1], m[2], m[3]))
+                continue
+            m = _MEMBER_PLAIN.match(line)
+            if m:
+                members.append(("INSTANCE", m[1], m[2]))
+                continue
+            raise MatiecError(f"{origin}: POU {name} has a member this backend cannot describe: {line!r} "
+                              f"(SFC steps and actions are not supported by the manifest)")
+        ct.pous[name] = members
+    return ct
+
+
+@dataclass
+class Root:
+    path: str
+    cname: str          # C symbol
+    how: str            # GLOBAL | GLOBAL_LOCATED | GLOBAL_FB | PROGRAM | LOCATION
+    ctype: str
+    scope: str = ""     # ST scope of a global ("CONFIG0" / "CONFIG0.RES0")
+    name: str = ""
+
+
+_GLOBAL = re.compile(r"__DECLARE_GLOBAL(|_LOCATED|_FB)\(\s*(\w+)\s*,\s*(\w+)\s*,\s*(\w+)\s*\)")
+_INSTANCE = re.compile(r"^(\w+)\s+(\w+?)__(\w+)\s*;\s*$", re.M)
+_LOCATED = re.compile(r"__LOCATED_VAR\(\s*(\w+)\s*,\s*(\w+)\s*,\s*([IQM])\s*,\s*(\w)\s*,\s*([0-9,\s]*)\)")
+
+
+def parse_roots(out_dir: Path, generated: list[Path], ctypes_: CTypes) -> tuple[list[Root], int]:
+    configs = [p for p in generated if p.suffix == ".c" and p.name != "POUS.c" and p.name.lower().startswith("config")]
+    config_name = configs[0].stem.upper() if configs else "CONFIG0"
+    roots: list[Root] = []
+    programs: dict[str, str] = {}
+    tick_ns = 0
+    csv_path = out_dir / "VARIABLES.csv"
+    if csv_path.is_file():
+        section = ""
+        for row in csv.reader(csv_path.read_text().splitlines(), delimiter=";"):
+            if not row or not row[0].strip():
+                continue
+            if row[0].startswith("//"):
+                section = row[0][2:].strip().lower()
+                continue
+            if section == "programs" and len(row) >= 3:
+                programs[row[1].strip().upper()] = row[2].strip().upper()
+            elif section == "ticktime":
+                tick_ns = int(row[0])
+    for path, ptype in programs.items():   # CONFIG0.RES0.INST0 -> RES0__INST0, Beremiz's rule
+        parts = path.split(".")
+        roots.append(Root(path, "__".join(parts[1:]), "PROGRAM", ptype))
+    for unit in generated:
+        if unit.suffix != ".c" or unit.name == "POUS.c":
+            continue
+        text = _LINE_DIRECTIVE.sub("", unit.read_text())
+        is_config = unit in configs
+        for how, ctype, domain, name in _GLOBAL.findall(text):
+            scope = config_name if is_config else f"{config_name}.{domain.upper()}"
+            roots.append(Root(f"{scope}.{name}", f"{domain}__{name}", "GLOBAL" + how, ctype, scope, name))
+        if not is_config:   # program instances also appear as `MAIN RES0__INST0;`
+            for ctype, domain, name in _INSTANCE.findall(text):
+                path = f"{config_name}.{domain}.{name}".upper()
+                if ctype in ctypes_.pous and path not in programs:
+                    roots.append(Root(path, f"{domain}__{name}", "PROGRAM", ctype))
+                    programs[path] = ctype
+    located = out_dir / "LOCATED_VARIABLES.h"
+    if located.is_file():
+        for ctype, cname, direction, size, loc in _LOCATED.findall(located.read_text()):
+            parts = [p.strip() for p in loc.split(",") if p.strip()]
+            size = size if size in "XBWDL" else ""
+            roots.append(Root(f"%{direction}{size}{'.'.join(parts)}", cname, "LOCATION", ctype))
+    if not tick_ns:
+        cfg = "".join(p.read_text() for p in configs)
+        m = re.search(r"common_ticktime__\s*=\s*(\d+)ULL\s*\*\s*(\d+)ULL", cfg)
+        tick_ns = int(m[1]) * int(m[2]) if m else 0
+    return roots, tick_ns
+
+
+# ---- the manifest -------------------------------------------------------------------------------------
+
+class ManifestBuilder:
+    """C declarations + ST declarations -> manifest types, with the C spelling of each for sizeof."""
+
+    def __init__(self, ct: CTypes, decls: st_decls.Declarations, program_types: set[str]):
+        self.ct, self.decls, self.program_types = ct, decls, program_types
+        self.types: dict[str, dict] = {}
+        self.cname: dict[str, str] = {}     # manifest reference -> C type for sizeof
+        self.warnings: list[str] = []
+
+    def ref(self, ctype: str, spec: st_decls.TypeSpec | None, where: str) -> str:
+        """The manifest type reference of a C type, given the ST declaration it came from (if known)."""
+        while ctype in self.ct.derived:
+            ctype = self.ct.derived[ctype]
+        if ctype in ELEMENTARY:
+            self.cname.setdefault(ctype, ctype)
+            return ctype
+        if ctype in self.ct.enums:
+            self._add(ctype, {"kind": "enum", "values": self.ct.enums[ctype]}, ctype)
+            return ctype
+        if ctype in self.ct.structs:
+            if ctype not in self.types:
+                self.types[ctype] = {}   # placeholder against recursion
+                st = self.decls.types.get(ctype)
+                _, st = self.decls.resolve(st)
+                fields = [{"name": m, "type": self.ref(t, st.fields.get(m) if st and st.kind == "struct" else None,
+                                                       f"{ctype}.{m}")} for t, m in self.ct.structs[ctype]]
+                self._add(ctype, {"kind": "struct", "fields": fields}, ctype)
+            return ctype
+        if ctype in self.ct.arrays:
+            return self._array(ctype, spec, where)
+        if ctype in self.ct.pous:
+            if ctype not in self.types:
+                self.types[ctype] = {}
+                pou = self.decls.pous.get(ctype)
+                fields = []
+                for how, mtype, member in self.ct.pous[ctype]:
+                    mspec = pou.vars.get(member) if pou else None
+                    if how == "INSTANCE":
+                        r = self.ref(mtype, mspec, f"{ctype}.{member}")
+                    elif how == "EXTERNAL_FB":
+                        r = self.wrap("ref", self.ref(mtype, mspec, f"{ctype}.{member}"), mtype)
+                    else:
+                        r = self.wrap("var" if how == "VAR" else "ptr", self.ref(mtype, mspec, f"{ctype}.{member}"),
+                                      mtype)
+                    fields.append({"name": member, "type": r})
+                kind = "program" if ctype in self.program_types or (pou and pou.kind == "PROGRAM") else "fb"
+                self._add(ctype, {"kind": kind, "fields": fields}, ctype)
+            return ctype
+        raise MatiecError(f"{where}: C type {ctype} is not declared in the generated headers")
+
+    def _array(self, ctype: str, spec: st_decls.TypeSpec | None, where: str) -> str:
+        base, sizes = self.ct.arrays[ctype]
+        name, st = self.decls.resolve(spec)
+        if st is not None and st.kind == "array" and [hi - lo + 1 for lo, hi in st.dims] == sizes:
+            dims = [list(d) for d in st.dims]
+            elem_spec = st.elem
+        else:
+            dims = [[0, n - 1] for n in sizes]
+            elem_spec = None
+            name = ""
+            self.warnings.append(f"{where}: no ST declaration found for this {ctype}; assuming lower bounds 0")
+        if not name:   # anonymous ARRAY[..] OF: the C name, plus the lower bounds when they are not 0
+            lows = [lo for lo, _ in dims]
+            name = ctype if not any(lows) else ctype + "__FROM_" + "_".join(str(lo).replace("-", "M") for lo in lows)
+        decl = {"kind": "array", "elem": self.ref(base, elem_spec, f"{where}[]"), "dims": dims}
+        self._add(name, decl, ctype, where)
+        return name
+
+    def _add(self, name: str, decl: dict, ctype: str, where: str = "") -> None:
+        old = self.types.get(name)
+        if old and old != decl:
+            raise MatiecError(f"{where or name}: type {name} is declared twice with different layouts")
+        self.types[name] = decl
+        self.cname[name] = ctype
+
+    def wrap(self, prefix: str, inner: str, ctype: str) -> str:
+        ref = f"{prefix}:{inner}"
+        while ctype in self.ct.derived:
+            ctype = self.ct.derived[ctype]
+        base = self.cname.get(inner, ctype)
+        self.cname[ref] = {"var": f"__IEC_{base}_t", "ptr": f"__IEC_{base}_p", "ref": f"{base} *"}[prefix]
+        return ref
+
+
+def describe(out_dir: Path, generated: list[Path], sources: Sources, m: Matiec,
+             backend_version: str) -> tuple[dict, str]:
+    """(manifest, plc_tables.c source) for iec2c's output in out_dir."""
+    ct = CTypes()
+    for header in ("iec_std_FB.h",):   # the standard FBs (TON, CTU...) as the generated code sees them
+        path = m.include / header
+        if path.is_file():
+            parse_header(path.read_text(), ct, header)
+    parse_header((out_dir / "POUS.h").read_text(), ct)
+    decls = st_decls.scan_paths(sources.files, sources.root)
+    roots, tick_ns = parse_roots(out_dir, generated, ct)
+    builder = ManifestBuilder(ct, decls, {r.ctype for r in roots if r.how == "PROGRAM"})
+    mroots = []
+    for r in roots:
+        spec = decls.globals.get(r.scope, {}).get(r.name) if r.scope else None
+        inner = builder.ref(r.ctype, spec, r.path)
+        ref = {"GLOBAL": lambda: builder.wrap("var", inner, r.ctype),
+               "GLOBAL_LOCATED": lambda: builder.wrap("ptr", inner, r.ctype)}.get(r.how, lambda: inner)()
+        mroots.append({"path": r.path, "type": ref})
+    size_checks = [ref for ref in builder.cname if not ref.startswith("ref:")]
+    pous = {name: {"file": p.file, "line": p.line, "kind": p.kind} for name, p in decls.pous.items()}
+    manifest = {
+        "schema": 1,
+        "backend": NAME,
+        "backend_version": backend_version,
+        "tick_ns": tick_ns,
+        "types": builder.types,
+        "roots": mroots,
+        "size_checks": size_checks,
+        "pous": pous,
+    }
+    if builder.warnings:
+        manifest["warnings"] = builder.warnings
+    return manifest, tables_c(roots, [builder.cname[s] for s in size_checks])
+
+
+def tables_c(roots: list[Root], size_exprs: list[str]) -> str:
+    lines = ["/* Generated by linmot_st.toolchain.matiec: where each manifest root lives, and the size of",
+             " * each manifest type as this compiler lays it out. */",
+             '#include "iec_std_lib.h"', '#include "accessor.h"', '#include "POUS.h"', ""]
+    addrs = []
+    for r in roots:
+        if r.how == "LOCATION":   # storage for a located variable; the generated code reads it via the pointer
+            lines.append(f"static {r.ctype} plc_located_{r.cname};")
+            lines.append(f"{r.ctype} *{r.cname} = &plc_located_{r.cname};")
+            addrs.append(f"&plc_located_{r.cname}")
+            continue
+        decl = {"GLOBAL": f"__IEC_{r.ctype}_t", "GLOBAL_LOCATED": f"__IEC_{r.ctype}_p"}.get(r.how, r.ctype)
+        lines.append(f"extern {decl} {r.cname};")
+        addrs.append(f"&{r.cname}")
+    lines += ["", "void *plc_root_addr(int i)", "{",
+              f"    static void *const table[] = {{{', '.join(addrs) or '0'}}};",
+              f"    return (i >= 0 && i < {len(addrs)}) ? table[i] : 0;", "}", "",
+              "unsigned long plc_type_size(int i)", "{",
+              f"    static const unsigned long table[] = {{{', '.join(f'sizeof({e})' for e in size_exprs) or '0'}}};",
+              f"    return (i >= 0 && i < {len(size_exprs)}) ? table[i] : 0;", "}", ""]
+    return "\n".join(lines)
+
+
+def generate(m: Matiec, sources: Sources, out_dir: Path, backend_version: str) -> tuple[dict, list[Path], list[Path]]:
+    """iec2c + tables: (manifest, C units to compile with the bounds trap, the tables unit)."""
+    generated = run_iec2c(m, sources, out_dir)
+    manifest, tables = describe(out_dir, generated, sources, m, backend_version)
+    tables_path = out_dir / "plc_tables.c"
+    tables_path.write_text(tables)
+    units = [p for p in generated if p.suffix == ".c" and p.name != "POUS.c"]
+    return manifest, units, [tables_path]
