@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from linmot_st.pvl import (CommandTableEntry, Curve, Parameter, ParameterObject, PvlFile, load_pvl, parse_pvl,
-                           save_pvl, write_pvl)
+from linmot_st.pvl import (CommandTableEntry, Curve, Parameter, ParameterObject, PvlError, PvlFile, load_pvl,
+                           parse_pvl, save_pvl, write_pvl)
 from linmot_st.pvl import demo
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
@@ -95,3 +95,13 @@ def test_command_table_entry_round_trip():
     text = write_pvl(PvlFile((entry,)))
     assert "@StartObject,CommandTableEntry\n@EntryID,0\n@EntryName,AAAAAAAAAAAAAAAA\n@DataBlockByteSize,64\n" in text
     assert parse_pvl(text).command_table == (entry,)
+
+
+def test_utf8_with_byte_order_mark():
+    # an editor may save the file as UTF-8 with a BOM: read it as UTF-8
+    text = write_pvl(PvlFile((MC,))).replace("3,0 A", "3,0 \u00b5A")
+    assert parse_pvl(b"\xef\xbb\xbf" + text.encode("utf-8")) == parse_pvl(text.encode("latin-1"))
+    bad = b"\xef\xbb\xbf" + text.encode("latin-1")
+    with pytest.raises(PvlError) as info:
+        parse_pvl(bad, filename="b.pvl")
+    assert str(info.value) == "b.pvl:13: the file starts with a UTF-8 byte-order mark but this line is not UTF-8"

@@ -47,7 +47,7 @@ def load_pvl(path: str | os.PathLike) -> PvlFile:
 def parse_pvl(text: str | bytes, filename: str = "<string>") -> PvlFile:
     """Parse and check PVL text (bytes are decoded as Latin-1). Raises PvlError."""
     if isinstance(text, (bytes, bytearray)):
-        text = bytes(text).decode(codec.TEXT_ENCODING)
+        text = _decode(bytes(text), filename)
     reader = _Reader(text)
     objects = reader.read_file()
     pvl = PvlFile(tuple(objects), filename=filename)
@@ -57,6 +57,18 @@ def parse_pvl(text: str | bytes, filename: str = "<string>") -> PvlFile:
     if diagnostics:
         raise PvlError(filename, diagnostics[:MAX_DIAGNOSTICS])
     return pvl
+
+
+def _decode(raw: bytes, filename: str) -> str:
+    """Latin-1, except for a file that starts with a UTF-8 byte-order mark (an editor saved it as UTF-8)."""
+    if not raw.startswith(b"\xef\xbb\xbf"):
+        return raw.decode(codec.TEXT_ENCODING)
+    try:
+        return raw[3:].decode("utf-8")
+    except UnicodeDecodeError as err:
+        line = raw[3:3 + err.start].count(b"\n") + 1
+        raise PvlError(filename, [Diagnostic(line, "the file starts with a UTF-8 byte-order mark "
+                                                   "but this line is not UTF-8")]) from None
 
 
 class _Abort(Exception):
