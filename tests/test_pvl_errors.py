@@ -285,6 +285,7 @@ MC = demo.mc_parameters((0x1194, 0x11A0))
     (replace(Curve.make(1, "x", (0, 1), 100), setpoints=(0, 1, 2)), r"info block says 2 setpoints, the data block holds 3"),
     (CommandTableEntry(1, bytes(63)), r"the data block has 63 bytes, must be 64"),
     (CommandTableEntry.make(-1, "x", 0x0100), r"entry ID outside 0..255"),
+    (CommandTableEntry.make(1, "Go ", 0x0100), r"command-table entry 1: name 'Go ' ends with blanks"),
 ])
 def test_writer_refuses_invalid_models(obj, pattern):
     msgs = _model_errors(PvlFile((obj,)))

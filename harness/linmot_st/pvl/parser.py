@@ -53,7 +53,7 @@ def parse_pvl(text: str | bytes, filename: str = "<string>") -> PvlFile:
     pvl = PvlFile(tuple(objects), filename=filename)
     # the model checks see only the objects that were read without error (a broken curve or entry is
     # left out), so they add no cascade of follow-on messages
-    diagnostics = reader.diagnostics + validate(pvl)
+    diagnostics = sorted(reader.diagnostics + validate(pvl), key=lambda d: d.line or 0)
     if diagnostics:
         raise PvlError(filename, diagnostics[:MAX_DIAGNOSTICS])
     return pvl
