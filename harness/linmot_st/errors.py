@@ -1,0 +1,246 @@
+"""The ErrorID numbers of the ST library, and their decoding.
+
+This table is the single source of truth. `st_lib/types/errors.st` (the struct `T_LmErrorIds` whose members
+hold these numbers as initial values, used by every FB) and the ErrorID table of `docs/st-library.md` are
+generated from it:
+
+    python -m linmot_st.errors --write      # rewrite st_lib/types/errors.st and the docs table
+    python -m linmot_st.errors --check      # exit 1 if either differs from this table
+
+and `tests/test_stlib_errors.py` fails if they diverge. `describe()` turns an ErrorID (and the SDO abort
+code an FB reports beside it) into text, for the commissioning report.
+
+Scheme (ErrorID is a WORD; the high byte is the group):
+  16#00xx  no error
+  16#01xx  invalid input, detected before any frame is sent (which input: the low byte)
+  16#02xx  the channel: not ready, busy, the FB lost its turn, mailbox full, drive rebooted
+  16#03xx  the transfer: SDO timeout, SDO abort (code on the FB's AbortCode output), protocol, sequence
+  16#04xx  an E1100 result code rr (byte 6 of the 60h download response, byte 4 of a curve-get answer):
+           ErrorID = 16#0400 + rr, for every rr; the known codes are named below
+  16#05xx  firmware compatibility (the seeds' table 5 rules)
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+
+@dataclass(frozen=True)
+class ErrorDef:
+    name: str   # member name in T_LmErrorIds (ST is case-insensitive: unique ignoring case)
+    value: int
+    text: str
+
+
+RESULT_BASE = 0x0400
+
+ERRORS: tuple[ErrorDef, ...] = (
+    ErrorDef("NoError", 0x0000, "no error"),
+    # 01xx invalid input
+    ErrorDef("InvalidNodeId", 0x0101, "node ID outside 1..127"),
+    ErrorDef("InvalidUpid", 0x0102, "UPID out of range (E1100: 0000h..3FFFh, the index 2000h+UPID must stay below 6000h)"),
+    ErrorDef("InvalidMem", 0x0103, "memory selector not allowed for this service or drive (e.g. read of RAM+ROM, min/max/default on a B1100)"),
+    ErrorDef("InvalidCurveId", 0x0104, "curve ID outside 1..100"),
+    ErrorDef("TooFewSetpoints", 0x0105, "fewer than 2 setpoints"),
+    ErrorDef("TooManySetpoints", 0x0106, "more setpoints than T_LmSetpoints holds (1000)"),
+    ErrorDef("DataSizeMismatch", 0x0107, "data block size is not number of setpoints x 4"),
+    ErrorDef("NameTooLong", 0x0108, "name too long (curve: 21 characters plus the terminating 00h, CT entry: 16)"),
+    ErrorDef("InvalidChar", 0x0109, "name or text holds a character outside printable ASCII (20h..7Eh)"),
+    ErrorDef("InfoDataOffset", 0x010A, "curve info block: data offset is not 70"),
+    ErrorDef("InfoObjectType", 0x010B, "curve info block: object type is not 0003h (position/time) or 0103h (cam)"),
+    ErrorDef("InfoTypeSize", 0x010C, "curve info block: data type size is not 4"),
+    ErrorDef("InfoCurveId", 0x010D, "curve info block: its curve ID differs from the CurveId input"),
+    ErrorDef("InvalidCtEntry", 0x010E, "command-table entry number outside 0..255"),
+    ErrorDef("CtVersion", 0x010F, "command-table block: version ID is not A701h"),
+    ErrorDef("CtLink", 0x0110, "command-table block: linked entry is neither FFFFh nor 0..255"),
+    ErrorDef("InvalidLayer", 0x0111, "firmware layer outside 1..4"),
+    ErrorDef("InvalidStringletCount", 0x0112, "stringlet count outside 1..32"),
+    ErrorDef("TextTooLong", 0x0113, "text longer than 4 x the stringlet count"),
+    ErrorDef("NotSupported", 0x0114, "service not supported by this drive type (B1100: curves, command table, defaults, UPID lists)"),
+    ErrorDef("NothingSelected", 0x0115, "flash save with neither Curves nor CommandTable selected"),
+    ErrorDef("InvalidUpidRange", 0x0116, "UPID list: start UPID above end UPID"),
+    ErrorDef("InvalidSdoCommand", 0x0117, "raw SDO: index below 1000h or above 5FFFh"),
+    # 02xx channel
+    ErrorDef("NotReady", 0x0201, "channel not ready: FB_LmChannel not called for this axis, or not yet enabled"),
+    ErrorDef("ChannelDisabled", 0x0202, "the channel's Enable input is FALSE"),
+    ErrorDef("NodeLost", 0x0203, "the drive's heartbeat stopped (channel HeartbeatTimeout)"),
+    ErrorDef("ChannelBusy", 0x0204, "waited longer than the channel's QueueTimeout for its turn"),
+    ErrorDef("Evicted", 0x0205, "the FB was not called while it held the channel and lost its turn"),
+    ErrorDef("TxFull", 0x0206, "the mailbox Tx array was full: frame not queued"),
+    ErrorDef("DriveRebooted", 0x0207, "the drive sent a boot-up message during the service"),
+    # 03xx transfer
+    ErrorDef("SdoTimeout", 0x0301, "no SDO response within the timeout"),
+    ErrorDef("SdoAbort", 0x0302, "the drive answered with an SDO abort (code on the AbortCode output)"),
+    ErrorDef("SdoProtocol", 0x0303, "unexpected SDO response (not an expedited answer of the requested kind)"),
+    ErrorDef("Sequence", 0x0304, "the drive's result code disagrees with the transfer length (finished early, or not at the end)"),
+    ErrorDef("BootTimeout", 0x0305, "reset: no boot-up message within BootTimeout"),
+    ErrorDef("FlashTimeout", 0x0306, "flash save: still busy after FlashTimeout"),
+    ErrorDef("UploadBlockSize", 0x0307, "the drive reported an info block size other than 70, or a CT block size other than 64"),
+    ErrorDef("UploadTooBig", 0x0308, "the curve on the drive has more setpoints than T_LmSetpoints holds, or a data size not a multiple of 4"),
+    ErrorDef("UploadInconsistent", 0x0309, "uploaded curve: the info block's setpoints x 4 differ from the data size"),
+    ErrorDef("ListFull", 0x030A, "UPID list longer than T_LmUpidList holds (the list holds the first 2048)"),
+    # 04xx E1100 result codes (16#0400 + rr)
+    ErrorDef("ResultBase", RESULT_BASE, "E1100 result code rr: ErrorID = 16#0400 + rr (the named ones follow)"),
+    ErrorDef("ResultNotFinished", RESULT_BASE + 0x04, "result 04h: block not finished where the end was expected / flash busy"),
+    ErrorDef("ResultUpidError", RESULT_BASE + 0xC0, "result C0h: UPID error"),
+    ErrorDef("ResultTypeError", RESULT_BASE + 0xC1, "result C1h: parameter type error"),
+    ErrorDef("ResultRangeError", RESULT_BASE + 0xC2, "result C2h: range error"),
+    ErrorDef("ResultUsageError", RESULT_BASE + 0xC3, "result C3h: address usage error"),
+    ErrorDef("ResultListNotStarted", RESULT_BASE + 0xC5, "result C5h: get next UPID without start"),
+    ErrorDef("ResultListEnd", RESULT_BASE + 0xC6, "result C6h: end of UPID list"),
+    ErrorDef("ResultBlockFinished", RESULT_BASE + 0xD0, "result D0h: block already finished"),
+    ErrorDef("ResultBlockSize", RESULT_BASE + 0xD1, "result D1h: invalid block size"),
+    ErrorDef("ResultCurveState", RESULT_BASE + 0xD4, "result D4h: curve already exists (add) / not present (get) / invalid entry"),
+    ErrorDef("ResultMcNotStopped", RESULT_BASE + 0xD7, "result D7h: MC software not stopped"),
+    # 05xx compatibility
+    ErrorDef("TreeIdMismatch", 0x0501, "firmware layer: tree ID of the source differs from the drive's"),
+    ErrorDef("MainVersionMismatch", 0x0502, "firmware layer: main version of the source differs from the drive's"),
+    ErrorDef("SubVersionNewer", 0x0503, "firmware layer: sub version of the source is newer than the drive's"),
+)
+
+BY_VALUE: dict[int, ErrorDef] = {e.value: e for e in ERRORS}
+BY_NAME: dict[str, ErrorDef] = {e.name: e for e in ERRORS}
+
+# CiA 301 SDO abort codes (section 7.2.4.3.17), for AbortCode
+SDO_ABORTS: dict[int, str] = {
+    0x05030000: "toggle bit not alternated",
+    0x05040000: "SDO protocol timed out",
+    0x05040001: "client/server command specifier not valid or unknown",
+    0x05040005: "out of memory",
+    0x06010000: "unsupported access to an object",
+    0x06010001: "attempt to read a write only object",
+    0x06010002: "attempt to write a read only object",
+    0x06020000: "object does not exist in the object dictionary",
+    0x06040041: "object cannot be mapped to the PDO",
+    0x06060000: "access failed due to a hardware error",
+    0x06070010: "data type does not match, length of service parameter does not match",
+    0x06090011: "sub-index does not exist",
+    0x06090030: "invalid value for parameter (download only)",
+    0x06090031: "value of parameter written too high",
+    0x06090032: "value of parameter written too low",
+    0x08000000: "general error",
+    0x08000020: "data cannot be transferred or stored to the application",
+    0x08000021: "data cannot be transferred because of local control",
+    0x08000022: "data cannot be transferred because of the present device state",
+}
+
+
+def describe(error_id: int, abort_code: int = 0) -> str:
+    """Text for an ErrorID of the library (and the SDO abort code reported with ErrorID SdoAbort)."""
+    e = BY_VALUE.get(error_id)
+    if e is not None and e.name != "ResultBase":
+        text = e.text
+    elif RESULT_BASE <= error_id <= RESULT_BASE + 0xFF:
+        text = f"E1100 result code {error_id - RESULT_BASE:02X}h"
+    else:
+        return f"unknown ErrorID 16#{error_id:04X}"
+    if error_id == BY_NAME["SdoAbort"].value:
+        text += f": {abort_code:08X}h {SDO_ABORTS.get(abort_code, 'unknown abort code')}"
+    return f"16#{error_id:04X} {text}"
+
+
+def name_of(error_id: int) -> str:
+    """Member name in T_LmErrorIds, or ResultXXh for an unnamed E1100 result code."""
+    e = BY_VALUE.get(error_id)
+    if e is not None:
+        return e.name
+    if RESULT_BASE <= error_id <= RESULT_BASE + 0xFF:
+        return f"Result{error_id - RESULT_BASE:02X}h"
+    return f"16#{error_id:04X}"
+
+
+# ---------------------------------------------------------------- generated artefacts
+
+REPO = Path(__file__).resolve().parents[2]
+ST_FILE = REPO / "st_lib" / "types" / "errors.st"
+DOC_FILE = REPO / "docs" / "st-library.md"
+DOC_BEGIN = "<!-- errors:begin (generated by python -m linmot_st.errors --write) -->"
+DOC_END = "<!-- errors:end -->"
+
+
+def render_st() -> str:
+    width = max(len(e.name) for e in ERRORS)
+    lines = [
+        "(* ErrorID numbers of the library. GENERATED from harness/linmot_st/errors.py by",
+        "   `python -m linmot_st.errors --write`: edit the Python table, not this file.",
+        "   Every FB holds one instance `E : T_LmErrorIds` and reports `E.<Name>`; the members' initial",
+        "   values are the numbers. Groups: 01xx invalid input, 02xx channel, 03xx transfer,",
+        "   04xx E1100 result code rr (16#0400 + rr), 05xx firmware compatibility. *)",
+        "TYPE",
+        "  T_LmErrorIds : STRUCT",
+    ]
+    for e in ERRORS:
+        text = e.text.replace("(*", "( *").replace("*)", "* )")
+        lines.append(f"    {e.name.ljust(width)} : WORD := 16#{e.value:04X};  (* {text} *)")
+    lines += ["  END_STRUCT;", "END_TYPE", ""]
+    return "\n".join(lines)
+
+
+def render_doc_table() -> str:
+    rows = ["| ErrorID | Name | Meaning |", "|---|---|---|"]
+    for e in ERRORS:
+        rows.append(f"| 16#{e.value:04X} | `{e.name}` | {e.text} |")
+    return "\n".join([DOC_BEGIN, *rows, DOC_END])
+
+
+def parse_st(text: str) -> dict[str, int]:
+    """Members and values of T_LmErrorIds as written in an ST file (used by the divergence check)."""
+    out: dict[str, int] = {}
+    for m in re.finditer(r"^\s*(\w+)\s*:\s*WORD\s*:=\s*16#([0-9A-Fa-f]+)\s*;", text, re.M):
+        out[m.group(1)] = int(m.group(2), 16)
+    return out
+
+
+def _doc_with_table(doc: str) -> str:
+    pattern = re.compile(re.escape(DOC_BEGIN) + ".*?" + re.escape(DOC_END), re.S)
+    if not pattern.search(doc):
+        raise ValueError(f"{DOC_FILE}: markers {DOC_BEGIN!r} .. {DOC_END!r} not found")
+    return pattern.sub(lambda _m: render_doc_table(), doc)
+
+
+def check() -> list[str]:
+    """Differences between the table and the generated files (empty when in sync)."""
+    problems = []
+    if not ST_FILE.exists() or ST_FILE.read_text() != render_st():
+        problems.append(f"{ST_FILE} differs from the table in {__name__}")
+    if DOC_FILE.exists():
+        doc = DOC_FILE.read_text()
+        try:
+            if _doc_with_table(doc) != doc:
+                problems.append(f"{DOC_FILE}: ErrorID table differs from the table in {__name__}")
+        except ValueError as exc:
+            problems.append(str(exc))
+    return problems
+
+
+def write() -> None:
+    ST_FILE.write_text(render_st())
+    if DOC_FILE.exists():
+        DOC_FILE.write_text(_doc_with_table(DOC_FILE.read_text()))
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog="python -m linmot_st.errors", description=__doc__.splitlines()[0])
+    g = p.add_mutually_exclusive_group(required=True)
+    g.add_argument("--write", action="store_true", help="rewrite st_lib/types/errors.st and the docs table")
+    g.add_argument("--check", action="store_true", help="exit 1 if the generated files differ")
+    g.add_argument("--describe", type=lambda s: int(s, 0), metavar="ERRORID", help="print the text of an ErrorID")
+    args = p.parse_args(argv)
+    if args.write:
+        write()
+        return 0
+    if args.check:
+        problems = check()
+        for line in problems:
+            print(line, file=sys.stderr)
+        return 1 if problems else 0
+    print(describe(args.describe))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
