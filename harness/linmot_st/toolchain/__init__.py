@@ -101,10 +101,11 @@ def build(path: str | os.PathLike, backend: str = "auto", out: str | os.PathLike
         tool = None
         try:
             from . import builtin
+            from .builtin import compile_to_c  # noqa: F401
         except ImportError as exc:
             raise CompileError([f"{src.entry}:1:1: error: the builtin compiler is not available: {exc}"],
                                chosen) from None
-        builtin_dir = Path(builtin.__file__).parent
+        builtin_dir = _TOOLCHAIN_DIR / "builtin"
         generator = [p for p in builtin_dir.rglob("*") if p.suffix in (".py", ".lark", ".c", ".h")]
         backend_version = getattr(builtin, "__version__", "") or _code_digest(generator)[:16]
         flags = []
