@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import pytest
 
-from linmot_st.plc import PathError, Plc, PlcFault
+import json
+import shutil
+
+from linmot_st.plc import LayoutError, PathError, Plc, PlcFault
 from linmot_st.toolchain.testing import BACKEND_PARAMS, build_text
 
 PROGRAM = """
@@ -50,6 +53,7 @@ END_FUNCTION_BLOCK
 PROGRAM Main
   VAR_EXTERNAL
     Total : UDINT;
+    Lamp : BOOL;
   END_VAR
   VAR
     Count : DINT;
@@ -78,6 +82,7 @@ PROGRAM Main
   Acc(Inc := 2, Den := AccDen);
   Elapsed := Acc.Delay.ET;
   Done := Acc.Delay.Q;
+  Lamp := Done;
   IF Start THEN
     Level := DINT_TO_INT(Count);
   END_IF;
@@ -92,6 +97,9 @@ CONFIGURATION Config0
   RESOURCE Res0 ON PLC
     VAR_GLOBAL
       Shared : INT;
+    END_VAR
+    VAR_GLOBAL
+      Lamp AT %QX1.0 : BOOL;
     END_VAR
     TASK MainTask(INTERVAL := T#10ms, PRIORITY := 0);
     PROGRAM Inst0 WITH MainTask : Main;
@@ -212,6 +220,13 @@ def test_located_variables(plc):
     assert plc["%IX0.0"] is False
 
 
+def test_located_global(plc):
+    plc.step(3)
+    assert plc["%QX1.0"] is False and plc["CONFIG0.RES0.LAMP"] is False
+    plc.step(1)                           # Done rises in scan 4
+    assert plc["%QX1.0"] is True and plc["CONFIG0.RES0.LAMP"] is True and plc["INST0.LAMP"] is True
+
+
 def test_bound_accessor(plc):
     count = plc.var("INST0.COUNT")
     start = plc.var("%IX0.0")
@@ -307,3 +322,21 @@ def test_fault_lines_are_known(built, plc):
         plc.step(1)
     assert info.value.line == DIV_IN_FB
     assert info.value.file.endswith("prog.st")
+
+
+def test_a_manifest_that_does_not_match_the_c_is_refused(built, tmp_path):
+    manifest = json.loads(built.manifest.read_text())
+    checked = [t for t in manifest["size_checks"] if manifest["types"].get(t, {}).get("kind") == "struct"]
+    assert checked, "the manifest checks the size of its struct types"
+    manifest["types"][checked[0]]["fields"].append({"name": "EXTRA", "type": "LINT"})
+    shutil.copyfile(built.library, tmp_path / built.library.name)
+    (tmp_path / "manifest.json").write_text(json.dumps(manifest))
+    with pytest.raises(LayoutError, match=f"does not describe the compiled C.*{checked[0]}"):
+        Plc(tmp_path)
+
+
+def test_roots_and_repr(plc):
+    roots = plc.roots()
+    assert "CONFIG0.RES0.INST0" in roots and "CONFIG0.TOTAL" in roots and "%IX0.0" in roots
+    assert "INST0.COUNT" in plc and "INST0.NOPE" not in plc
+    assert "scan 0" in repr(plc)
