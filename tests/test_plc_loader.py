@@ -239,6 +239,15 @@ def test_bound_accessor(plc):
     assert plc["%QW2"] == 101
 
 
+def test_raw_bytes_of_a_byte_array(plc):
+    buf = plc.var("INST0.ACC.BUF")
+    assert buf.nbytes == 8 and buf.read_bytes() == bytes(8)
+    buf.write_bytes(b"\x01\x02\x03")
+    assert plc["INST0.ACC.BUF"] == [1, 2, 3, 0, 0, 0, 0, 0]
+    with pytest.raises(ValueError):
+        buf.write_bytes(bytes(9))
+
+
 def test_force_pins_a_variable_until_unforced(plc):
     plc.force("INST0.COUNT", 40)
     plc.step(3)

@@ -53,6 +53,25 @@ class Var:
         if self._flags is not None:
             self._flags.value &= ~FORCE_FLAG & 0xFF
 
+    @property
+    def address(self) -> int:
+        """Where the value lives in the PLC's memory (for bulk ctypes access, e.g. ctypes.memmove)."""
+        return self._addr
+
+    @property
+    def nbytes(self) -> int:
+        return self._info.size
+
+    def read_bytes(self) -> bytes:
+        """The value's raw C bytes (an ARRAY OF BYTE is its bytes, in index order)."""
+        return ctypes.string_at(self._addr, self._info.size)
+
+    def write_bytes(self, data: bytes) -> None:
+        """Overwrite the value's leading bytes with `data` (at most its size)."""
+        if len(data) > self._info.size:
+            raise ValueError(f"{self.path}: {len(data)} bytes do not fit its {self._info.size}")
+        ctypes.memmove(self._addr, data, len(data))
+
     def __repr__(self) -> str:
         return f"<Var {self.path}: {self.type} = {self.value!r}>"
 

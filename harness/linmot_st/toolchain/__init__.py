@@ -30,7 +30,7 @@ class CompileError(Exception):
     def __init__(self, diagnostics: list[str] | str, backend: str = ""):
         if isinstance(diagnostics, str):
             diagnostics = diagnostics.splitlines() or [diagnostics]
-        self.diagnostics = list(diagnostics)
+        self.diagnostics = [str(d) for d in diagnostics]
         self.backend = backend
         super().__init__("\n".join(self.diagnostics))
 
@@ -182,7 +182,8 @@ def _builtin_generate(src: _sources.Sources, c_dir: Path) -> tuple[dict, list[Pa
         out = builtin.compile_to_c(src.entry, src.root, c_dir)
     except Exception as exc:
         if error_cls and isinstance(exc, error_cls):
-            raise CompileError(list(getattr(exc, "diagnostics", None) or str(exc).splitlines()), "builtin") from None
+            diags = [str(d) for d in (getattr(exc, "diagnostics", None) or [])] or str(exc).splitlines()
+            raise CompileError(diags, "builtin") from None
         raise
     manifest = getattr(out, "manifest", None)
     if isinstance(manifest, (str, Path)):
