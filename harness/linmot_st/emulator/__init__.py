@@ -1,0 +1,21 @@
+"""The emulated LinMot E1100 CANopen drive (sans-I/O bus node), its parameter data and its EDS.
+
+    from linmot_st.emulator import E1100Drive
+    drive = E1100Drive(node_id=1)
+    drive.power_on(0)
+
+docs/emulator.md describes the behaviour and every choice made where the sources are silent.
+"""
+
+from .codes import SdoAbort
+from .command_table import CommandTable, build_entry
+from .curves import Curve, CurveStore
+from .drive import BOOTING, OFF, OPERATIONAL, PRE_OPERATIONAL, STOPPED, DriveTimings, E1100Drive
+from .errorlog import ErrorEntry, ErrorLog
+from .profile import DriveProfile, ParamDef, ProfileError, load_profile
+
+__all__ = [
+    "E1100Drive", "DriveTimings", "DriveProfile", "ParamDef", "ProfileError", "load_profile",
+    "Curve", "CurveStore", "CommandTable", "build_entry", "ErrorLog", "ErrorEntry", "SdoAbort",
+    "OFF", "BOOTING", "PRE_OPERATIONAL", "OPERATIONAL", "STOPPED",
+]

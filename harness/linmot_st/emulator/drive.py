@@ -1,0 +1,445 @@
+"""E1100Drive: the emulated LinMot E1100 with CANopen firmware, as a sans-I/O bus node (docs/architecture.md 3, 4).
+
+Frames go in with the time they ended on the bus (`on_frame`), frames come out with the time they are ready to
+be sent; timed work (boot, heartbeat, flash writes, MC start/stop, set-to-default) runs from `on_timer` at
+`next_timer_ns()`. No threads and no clock inside: the same model runs in virtual time on the simulated bus and
+in real time on a python-can bus (`attach`).
+"""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+import struct
+import threading
+from dataclasses import dataclass, field
+
+from . import codes
+from .codes import SdoAbort
+from .command_table import CommandTable
+from .comm import CommObjects
+from .curves import CurveStore
+from .errorlog import ErrorLog
+from .manufacturer import ManufacturerObjects, Reply
+from .mc import SETUP_ERROR, ERROR, MotionControl
+from .params import ParameterStore
+from .profile import DriveProfile, load_profile
+from .sdo import Pending, SdoServer
+from ..bus.frame import Frame
+
+MS = 1_000_000
+S = 1_000_000_000
+
+# NMT states (heartbeat state byte in brackets)
+OFF, BOOTING, PRE_OPERATIONAL, OPERATIONAL, STOPPED = "OFF", "BOOTING", "PRE-OPERATIONAL", "OPERATIONAL", "STOPPED"
+_HEARTBEAT_STATE = {PRE_OPERATIONAL: 0x7F, OPERATIONAL: 0x05, STOPPED: 0x04}
+
+MOTOR_TYPE_UPID = 0x1194
+PRODUCE_HEARTBEAT_UPID, PRODUCER_TIME_UPID = 0x2020, 0x2021
+
+
+@dataclass(frozen=True)
+class DriveTimings:
+    """Durations of the drive's work, in ns. docs/emulator.md says which come from the sources."""
+    sdo_turnaround_ns: int = 150_000          # request received -> response ready (INVENTED, 100..200 us)
+    boot_ns: int = 4 * S                      # power-on / reset -> boot-up message (INVENTED)
+    reset_communication_ns: int = 10 * MS     # NMT Reset Communication -> boot-up message (INVENTED)
+    mc_stop_ns: int = 100 * MS                # 35h stop MC -> response (INVENTED)
+    mc_start_ns: int = 3 * S                  # 36h start MC -> response (LinRS: "response after completion, ~3 s")
+    set_default_ns: tuple[int, int, int, int] = (500 * MS, 2 * S, 500 * MS, 500 * MS)  # 07h..0Ah ([CO1100]; 0Ah INVENTED)
+    flash_base_ns: int = 300 * MS             # 40h / 80h flash save: erase + fixed part (INVENTED)
+    flash_per_kib_ns: int = 20 * MS           # ... plus this per KiB written (INVENTED)
+    hw_test_ns: int = 300 * MS                # MC state 5 "HW tests" (seeds 004 3.6: about 300 ms)
+    pdo_latency_ns: int = 100_000             # event -> TxPDO ready (INVENTED)
+
+    @classmethod
+    def fast(cls, **changes) -> "DriveTimings":
+        """Short durations for real-time tests on python-can buses (nothing waits seconds)."""
+        base = dict(boot_ns=20 * MS, reset_communication_ns=2 * MS, mc_stop_ns=5 * MS, mc_start_ns=20 * MS,
+                    set_default_ns=(10 * MS, 20 * MS, 10 * MS, 10 * MS), flash_base_ns=10 * MS,
+                    flash_per_kib_ns=1 * MS, hw_test_ns=10 * MS)
+        base.update(changes)
+        return cls(**base)
+
+
+@dataclass(order=True)
+class _Event:
+    t: int
+    seq: int
+    drive_gen: int = field(compare=False)
+    comm_gen: int | None = field(compare=False)
+    fn: object = field(compare=False)
+
+
+class E1100Drive:
+    """The emulated drive. `E1100Drive(node_id=1)` is the seeds' example drive (data/e1100_default.json).
+
+    profile        another parameter set / tree versions / identity (profile.py: load_profile().with_tree(...))
+    timings        DriveTimings
+    state_refusal  how a flash save (40h, 80h) with the MC software running is refused: "result" answers the
+                   LinRS state D7h in byte 6 (default), "abort" answers SDO abort 08000022h
+    error_log      a prepared ErrorLog (kept over resets, like the drive's own)
+    """
+
+    def __init__(self, node_id: int = 1, profile: DriveProfile | None = None, timings: DriveTimings | None = None,
+                 *, state_refusal: str = "result", curve_capacity_bytes: int = 256 * 1024,
+                 error_log: ErrorLog | None = None):
+        if not 1 <= node_id <= 127:
+            raise ValueError(f"CANopen node ID {node_id} is outside 1..127")
+        if state_refusal not in ("result", "abort"):
+            raise ValueError("state_refusal is 'result' or 'abort'")
+        self.node_id = node_id
+        self.profile = profile or load_profile()
+        self.timings = timings or DriveTimings()
+        self.state_refusal = state_refusal
+        self.params = ParameterStore(self.profile.all_definitions())
+        self.curves = CurveStore(curve_capacity_bytes)
+        self.ct = CommandTable()
+        self.errlog = error_log or ErrorLog()
+        self.mc = MotionControl(self.timings.hw_test_ns)
+        self.mc_phase = "stopped"          # stopped | starting | running | stopping
+        self.comm = CommObjects(node_id, self.profile.identity, self._heartbeat_power_on_ms,
+                                self._error_register, self._comm_changed)
+        self.mfr = ManufacturerObjects(self)
+        self.sdo = SdoServer(self.comm, self.mfr, lambda: self.nmt_state == PRE_OPERATIONAL)
+        self.nmt_state = OFF
+        self.now_ns = 0
+        self.lock = threading.RLock()      # held by the real-time server around each call (inspection may take it)
+        self._events: list[_Event] = []
+        self._seq = itertools.count()
+        self._drive_gen = 0                # bumped by a drive reset: cancels every pending event
+        self._comm_gen = 0                 # bumped by a communication reset: cancels SDO answers, heartbeat
+        self._hb_gen = 0
+        self._sdo_busy = False
+        self._flash_busy: str | None = None
+        self._out: list[tuple[int, object]] = []
+        self._sync_count = [0, 0, 0]
+        self._tx_last: list[bytes | None] = [None, None, None]
+        self._server = None
+
+    # ------------------------------------------------------------------ node protocol
+    def power_on(self, t_ns: int) -> None:
+        """Switch the drive on at t_ns: it boots and sends its boot-up message after `timings.boot_ns`."""
+        self.now_ns = t_ns
+        self._start_boot(t_ns)
+
+    def power_off(self) -> None:
+        self.nmt_state = OFF
+        self._drive_gen += 1
+        self._comm_gen += 1
+        self.mc.stop()
+        self.mc_phase = "stopped"
+
+    def on_frame(self, frame, t_ns: int) -> list:
+        self.now_ns = max(self.now_ns, t_ns)
+        if self.nmt_state in (OFF, BOOTING) or frame.rtr:
+            return []
+        cid, data = frame.can_id, frame.data
+        if cid == 0x000:
+            self._nmt_command(data, t_ns)
+        elif cid == 0x600 + self.node_id:
+            if self.nmt_state != STOPPED and not self._sdo_busy:
+                self._sdo_request(bytes(data), t_ns)
+        elif self.nmt_state == OPERATIONAL:
+            self._process_data(cid, data, t_ns)
+        return self._take(t_ns)
+
+    def on_timer(self, t_ns: int) -> list:
+        self.now_ns = max(self.now_ns, t_ns)
+        while self._events and self._events[0].t <= t_ns:
+            ev = heapq.heappop(self._events)
+            if self._live(ev):
+                self.now_ns = max(self.now_ns, ev.t)
+                ev.fn(ev.t)
+        mc_t = self.mc.next_timer_ns()
+        if mc_t is not None and mc_t <= t_ns and self.mc.on_timer(t_ns):
+            self._mc_changed(t_ns)
+        return self._take(t_ns)
+
+    def next_timer_ns(self) -> int | None:
+        while self._events and not self._live(self._events[0]):
+            heapq.heappop(self._events)
+        t = self._events[0].t if self._events else None
+        mc_t = self.mc.next_timer_ns()
+        if mc_t is not None and (t is None or mc_t < t):
+            t = mc_t
+        return t
+
+    # ------------------------------------------------------------------ inspection
+    @property
+    def booted(self) -> bool:
+        return self.nmt_state in (PRE_OPERATIONAL, OPERATIONAL, STOPPED)
+
+    def rom(self, upid: int) -> int:
+        return self.params[upid].rom
+
+    def ram(self, upid: int) -> int:
+        return self.params[upid].ram
+
+    def string(self, upid: int, which: str = "rom") -> str:
+        return self.params.string(upid, which)
+
+    def flash_busy(self) -> bool:
+        return self._flash_busy is not None
+
+    @property
+    def sdo_busy(self) -> bool:
+        return self._sdo_busy
+
+    # ------------------------------------------------------------------ real time
+    def attach(self, bus) -> None:
+        """Serve this drive on a python-can `bus` in real time from a background thread until `detach()`.
+
+        The bus package's NodeServer runs the node; its clock starts at 0, so attaching is a power cycle:
+        the drive boots (boot-up message after `timings.boot_ns`) with its ROM, flash and error log kept.
+        While attached, take `drive.lock` to inspect or change the drive from another thread.
+        """
+        from ..bus import NodeServer
+
+        if self._server is not None:
+            raise RuntimeError("drive is already attached to a bus")
+        server = NodeServer(self, bus, on_start=self.power_on, name=f"E1100 node {self.node_id}")
+        self.lock = server.lock
+        self._server = server.start()
+
+    def detach(self) -> None:
+        """Stop serving (joins the thread); re-raises an exception the drive raised meanwhile."""
+        server, self._server = self._server, None
+        if server is not None:
+            try:
+                server.stop()
+            finally:
+                self.lock = threading.RLock()
+
+    # ------------------------------------------------------------------ internals: scheduling
+    def _live(self, ev: _Event) -> bool:
+        return ev.drive_gen == self._drive_gen and (ev.comm_gen is None or ev.comm_gen == self._comm_gen)
+
+    def _at(self, t: int, fn, comm: bool = False) -> None:
+        heapq.heappush(self._events, _Event(t, next(self._seq), self._drive_gen,
+                                            self._comm_gen if comm else None, fn))
+
+    def _send(self, t: int, can_id: int, data: bytes) -> None:
+        self._out.append((t, Frame(can_id, data)))
+
+    def _take(self, t_ns: int) -> list:
+        out, self._out = self._out, []
+        return [(max(t, t_ns), f) for t, f in out]
+
+    def _operating_ms(self, t_ns: int) -> int:
+        return self.profile.identity.operating_hours * 3_600_000 + t_ns // MS
+
+    # ------------------------------------------------------------------ boot and NMT
+    def _start_boot(self, t: int) -> None:
+        """Power-on, software reset (0Bh) and NMT Reset Node: the whole firmware starts again."""
+        self._drive_gen += 1
+        self._comm_gen += 1
+        self.nmt_state = BOOTING
+        self._sdo_busy = False
+        self._flash_busy = None
+        self.mc.stop()
+        self.mc_phase = "stopped"
+        self.params.load_ram_from_rom()
+        self.curves.boot()
+        self.ct.boot()
+        self.mfr.reset()
+        self.sdo.reset()
+        self.comm.reset()
+        self._at(t + self.timings.boot_ns, self._boot_done)
+
+    def _boot_done(self, t: int) -> None:
+        self._mc_start_now(t)
+        self._enter_pre_operational(t)
+
+    def _enter_pre_operational(self, t: int) -> None:
+        self.nmt_state = PRE_OPERATIONAL
+        self._sync_count = [0, 0, 0]
+        self._tx_last = [None, None, None]
+        self._send(t, 0x700 + self.node_id, b"\x00")        # boot-up message
+        self._restart_heartbeat(t)
+
+    def _nmt_command(self, data: bytes, t: int) -> None:
+        if len(data) < 2 or data[1] not in (0, self.node_id):
+            return
+        cs = data[0]
+        if cs == 0x01:
+            if self.nmt_state != OPERATIONAL:
+                self.nmt_state = OPERATIONAL
+                self._tx_last = [None, None, None]
+                self._send_event_pdos(t + self.timings.pdo_latency_ns)
+        elif cs == 0x02:
+            self.nmt_state = STOPPED
+        elif cs == 0x80:
+            self.nmt_state = PRE_OPERATIONAL
+        elif cs == 0x81:
+            self._start_boot(t)
+        elif cs == 0x82:
+            self._comm_gen += 1
+            self._sdo_busy = False
+            self.nmt_state = BOOTING
+            self.sdo.reset()
+            self.comm.reset()
+            self._at(t + self.timings.reset_communication_ns, self._enter_pre_operational, comm=True)
+
+    def _heartbeat_power_on_ms(self) -> int:
+        """1017h at power-on: the interface parameters "Produce Heartbeat" / "Producer Time" (RAM)."""
+        p = self.params
+        if PRODUCE_HEARTBEAT_UPID in p and PRODUCER_TIME_UPID in p and p[PRODUCE_HEARTBEAT_UPID].ram:
+            return p[PRODUCER_TIME_UPID].ram
+        return 0
+
+    def _restart_heartbeat(self, t: int) -> None:
+        self._hb_gen += 1
+        period = self.comm.value(0x1017) * MS
+        if period:
+            gen = self._hb_gen
+            self._at(t + period, lambda te: self._heartbeat(te, gen, period), comm=True)
+
+    def _heartbeat(self, t: int, gen: int, period: int) -> None:
+        if gen != self._hb_gen:
+            return
+        state = _HEARTBEAT_STATE.get(self.nmt_state)
+        if state is not None:
+            self._send(t, 0x700 + self.node_id, bytes([state]))
+        self._at(t + period, lambda te: self._heartbeat(te, gen, period), comm=True)
+
+    def _comm_changed(self, index: int, sub: int) -> None:
+        if index == 0x1017:
+            self._restart_heartbeat(self.now_ns)
+
+    def _error_register(self) -> int:
+        return 0x01 if self.mc.running and self.mc.state in (SETUP_ERROR, ERROR) else 0x00
+
+    # ------------------------------------------------------------------ SDO
+    def _sdo_request(self, data: bytes, t: int) -> None:
+        res = self.sdo.handle(data)
+        if res is None:
+            return
+        ready = t + self.timings.sdo_turnaround_ns
+        tx = 0x580 + self.node_id
+        if isinstance(res, Pending):
+            self._sdo_busy = True
+            comm_gen = self._comm_gen
+
+            def finish(te, res=res):
+                # the operation completes even after a Reset Communication; only its answer is dropped then
+                if comm_gen == self._comm_gen:
+                    self._sdo_busy = False
+                    if self.nmt_state in (PRE_OPERATIONAL, OPERATIONAL):
+                        self._send(te, tx, res.response)
+                if res.then is not None:
+                    res.then()
+            self._at(ready + res.delay_ns, finish)
+        else:
+            self._send(ready, tx, res)
+
+    # --- system services called by the manufacturer objects ---
+    def set_layer_default(self, layer: int) -> Reply:
+        return Reply(delay_ns=self.timings.set_default_ns[layer - 1],
+                     then=lambda: self.params.set_layer_default(layer))
+
+    def software_reset(self) -> None:
+        self._start_boot(self.now_ns)
+
+    def stop_mc(self) -> int | Reply:
+        if self.mc_phase == "stopped":
+            return codes.RC_OK
+        self.mc_phase = "stopping"
+
+        def stopped():
+            self.mc.stop()
+            self.mc_phase = "stopped"
+            self._mc_changed(self.now_ns)
+        return Reply(delay_ns=self.timings.mc_stop_ns, then=stopped)
+
+    def start_mc(self) -> int | Reply:
+        if self.flash_busy():
+            raise SdoAbort(codes.ABORT_STATE, "flash save in progress")
+        if self.mc_phase == "running":
+            return codes.RC_OK
+        self.mc_phase = "starting"
+
+        def started():
+            # a firmware start copies ROM to RAM (seeds 2.3): MC and application layers start again
+            self.params.load_ram_from_rom({2, 4})
+            self._mc_start_now(self.now_ns)
+        return Reply(delay_ns=self.timings.mc_start_ns, then=started)
+
+    def _mc_start_now(self, t: int) -> None:
+        motor = self.params[MOTOR_TYPE_UPID].ram if MOTOR_TYPE_UPID in self.params else 1
+        error = self.mc.start(t, motor_defined=motor != 0)
+        self.mc_phase = "running"
+        if error is not None:
+            self.errlog.log(error, self._operating_ms(t))
+        self._mc_changed(t)
+
+    def save_to_flash(self, what: str) -> int:
+        if self.mc_phase != "stopped":
+            if self.state_refusal == "abort":
+                raise SdoAbort(codes.ABORT_STATE, "MC software runs: stop it (35h) before a flash save")
+            return codes.RC_MC_NOT_STOPPED
+        store = self.curves if what == "curves" else self.ct
+        kib = -(-store.flash_image_bytes() // 1024)
+        self._flash_busy = what
+
+        def done(te):
+            store.commit_to_flash()
+            self._flash_busy = None
+        self._at(self.now_ns + self.timings.flash_base_ns + kib * self.timings.flash_per_kib_ns, done)
+        return codes.RC_OK
+
+    # ------------------------------------------------------------------ MC and PDOs
+    def _mc_changed(self, t: int) -> None:
+        sw, sv, err, warn = self.mc.outputs()
+        p = self.params
+        for upid, v in ((0x1D51, sw), (0x1B62, sv), (0x1D96, err), (0x1D8E, warn), (0x1D52, self.mc.control_word)):
+            p.set_variable(upid, v)
+        if self.nmt_state == OPERATIONAL:
+            self._send_event_pdos(t + self.timings.pdo_latency_ns)
+
+    def _tpdo_payload(self, n: int) -> bytes | None:
+        if n == 0:
+            return struct.pack("<HHHH", *self.mc.outputs())
+        if n == 1:
+            return bytes(8)      # motion command status, actual position, current, demand position: no motion
+        return None              # TxPDO3: empty by default ([CO1100] p.18)
+
+    def _tpdo_cob(self, n: int) -> int | None:
+        cob = self.comm.value(0x1800 + n, 1)
+        return None if cob & 0x80000000 else cob & 0x7FF
+
+    def _send_tpdo(self, n: int, t: int, only_if_changed: bool) -> None:
+        cob, payload = self._tpdo_cob(n), self._tpdo_payload(n)
+        if cob is None or payload is None:
+            return
+        if only_if_changed and payload == self._tx_last[n]:
+            return
+        self._tx_last[n] = payload
+        self._send(t, cob, payload)
+
+    def _send_event_pdos(self, t: int) -> None:
+        for n in range(3):
+            if self.comm.value(0x1800 + n, 2) >= 254:
+                self._send_tpdo(n, t, only_if_changed=True)
+
+    def _process_data(self, cid: int, data: bytes, t: int) -> None:
+        ready = t + self.timings.pdo_latency_ns
+        if cid == self.comm.value(0x1005) & 0x7FF:                 # SYNC
+            for n in range(3):
+                ttype = self.comm.value(0x1800 + n, 2)
+                if 1 <= ttype <= 240:
+                    self._sync_count[n] += 1
+                    if self._sync_count[n] >= ttype:
+                        self._sync_count[n] = 0
+                        self._send_tpdo(n, ready, only_if_changed=False)
+            return
+        for n in range(3):
+            cob = self.comm.value(0x1400 + n, 1)
+            if cob & 0x80000000 or cid != cob & 0x7FF:
+                continue
+            if n == 0 and len(data) >= 2:                           # RxPDO1: control word (1D52h)
+                if self.mc.set_control_word(data[0] | data[1] << 8, t):
+                    self._mc_changed(t)
+            if self.comm.value(0x1800 + n, 2) == 250:               # LinMot: TxPDO n answers RxPDO n
+                self._send_tpdo(n, ready, only_if_changed=False)
+            return
