@@ -198,3 +198,37 @@ def test_auto_picks_matiec_with_iec2c():
 def test_unknown_backend():
     with pytest.raises(ValueError, match="unknown backend"):
         choose_backend("gcc")
+
+
+@requires_matiec
+def test_matiec_missing_call_wrapper_is_an_error_at_the_st_line(tmp_path):
+    """A MatIEC defect: a FUNCTION with VAR_IN_OUT called as the argument of another call inside an FB gets
+    no C wrapper. With an implicit declaration the C would compile and misbehave; it must not build."""
+    src = """
+    TYPE
+      T_B : ARRAY[0..3] OF BYTE;
+    END_TYPE
+    FUNCTION F_Get : UDINT
+      VAR_IN_OUT
+        B : T_B;
+      END_VAR
+      VAR_INPUT
+        Ofs : INT;
+      END_VAR
+      F_Get := BYTE_TO_UDINT(B[Ofs]);
+    END_FUNCTION
+    FUNCTION_BLOCK Fb
+      VAR
+        Buf : T_B;
+        W : UDINT;
+        K : INT;
+      END_VAR
+      K := UDINT_TO_INT(F_Get(Buf, 1));
+      W := F_Get(Buf, 2);
+    END_FUNCTION_BLOCK
+    """
+    with pytest.raises(CompileError) as info:
+        build_text(src, tmp_path, "matiec")
+    diags = info.value.diagnostics
+    assert any(DIAGNOSTIC.match(d) and ("prog.st:19:" in d or "prog.st:20:" in d) for d in diags), diags
+    assert any("MatIEC defect" in d for d in diags)

@@ -11,6 +11,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import re
 import shutil
 import sys
 import time
@@ -96,7 +97,7 @@ def build(path: str | os.PathLike, backend: str = "auto", out: str | os.PathLike
                                 f"(set IEC2C or MATIEC_HOME, or put iec2c on PATH)"], chosen)
         backend_version = matiec.version(tool)
         generator = [_TOOLCHAIN_DIR / "matiec.py", _TOOLCHAIN_DIR / "st_decls.py"]
-        flags = list(matiec.flags(tool.iec2c)) + cc.bounds_trap_flags()
+        flags = list(matiec.flags(tool.iec2c)) + cc.bounds_trap_flags() + ["-Werror=implicit-function-declaration"]
     else:
         tool = None
         try:
@@ -149,8 +150,10 @@ def _compile(chosen: str, tool, src: _sources.Sources, store: _cache.Cache, key:
                 manifest, units, plain_units = matiec.generate(tool, src, c_dir, backend_version)
             except matiec.MatiecError as exc:
                 raise CompileError(exc.diagnostics, chosen) from None
-            trap = cc.bounds_trap_flags()
-            unit_flags = {u: trap for u in units}
+            # MatIEC sometimes calls a helper it never declares (and never defines): with an implicit
+            # `int` declaration the C would compile and misbehave, so that is an error at the ST line
+            strict = cc.bounds_trap_flags() + ["-Werror=implicit-function-declaration"]
+            unit_flags = {u: strict for u in units}
             all_units = units + plain_units
             include_dirs = [c_dir, tool.include]
             read = list(src.files)
@@ -163,6 +166,8 @@ def _compile(chosen: str, tool, src: _sources.Sources, store: _cache.Cache, key:
                               include_dirs=include_dirs, unit_flags=unit_flags, cwd=src.root)
         except cc.CCompileError as exc:
             diags = exc.diagnostics or [f"{src.entry_rel}:1:1: error: {exc}"]
+            if chosen == "matiec":
+                diags = _explain_matiec_c_errors(diags)
             raise CompileError(diags + ["(the C compiler rejected the generated C)", str(exc)], chosen) from None
         for o in staging.glob("*.o"):
             o.unlink()
@@ -172,6 +177,20 @@ def _compile(chosen: str, tool, src: _sources.Sources, store: _cache.Cache, key:
     except BaseException:
         store.discard(staging)
         raise
+
+
+_MISSING_WRAPPER = re.compile(r"implicit declaration of function .__\w+?\d+.")
+
+
+def _explain_matiec_c_errors(diags: list[str]) -> list[str]:
+    """Add what is known about MatIEC defects that surface as C errors."""
+    if any(_MISSING_WRAPPER.search(d) for d in diags):
+        diags = diags + [
+            "note: iec2c used a call wrapper it never defined (MatIEC defect: inside a FUNCTION_BLOCK, a "
+            "FUNCTION with VAR_IN_OUT called as an argument of another call, e.g. UDINT_TO_INT(F(Buf, 1)), "
+            "gets no wrapper and shifts the numbering of the later ones). Assign such a call's result to a "
+            "variable first, then convert it."]
+    return diags
 
 
 def _builtin_generate(src: _sources.Sources, c_dir: Path) -> tuple[dict, list[Path], list[Path]]:

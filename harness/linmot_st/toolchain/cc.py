@@ -21,7 +21,8 @@ GLUE_SOURCES = [GLUE_DIR / "plc_glue.c"]
 
 # -g: the line table lets a fault's address be mapped back to its POU and ST line
 BASE_FLAGS = ["-O2", "-g", "-fPIC", "-Wno-unused-function", "-fno-strict-aliasing"]
-LINK_FLAGS = ["-shared", "-lm", "-ldl", "-lpthread"]
+# -z defs: a symbol the generated C uses but never defines fails the link, not the later dlopen
+LINK_FLAGS = ["-shared", "-Wl,-z,defs", "-lm", "-ldl", "-lpthread"]
 
 
 class CCompileError(Exception):
