@@ -118,6 +118,8 @@ SDO_ABORTS: dict[int, str] = {
     0x06040041: "object cannot be mapped to the PDO",
     0x06060000: "access failed due to a hardware error",
     0x06070010: "data type does not match, length of service parameter does not match",
+    0x06070012: "data type does not match, length of service parameter too high",
+    0x06070013: "data type does not match, length of service parameter too low",
     0x06090011: "sub-index does not exist",
     0x06090030: "invalid value for parameter (download only)",
     0x06090031: "value of parameter written too high",
@@ -126,6 +128,7 @@ SDO_ABORTS: dict[int, str] = {
     0x08000020: "data cannot be transferred or stored to the application",
     0x08000021: "data cannot be transferred because of local control",
     0x08000022: "data cannot be transferred because of the present device state",
+    0x08000024: "no data available",
 }
 
 

@@ -1,0 +1,193 @@
+"""Test helpers for the ST library: the testbench PLC (tests/st_lib/testbench.st) on a simulated bus
+with emulated E1100 drives, and a handle per FB instance that drives its PLCopen inputs.
+
+    b = Bench(nodes=1)                 # drives 1..n booted, channels enabled and ready
+    r = b.fb("RD").run(UPID=0x1194)    # Execute, step until Done/Error, Execute off
+    r.done, r.error, r.error_id, r.scans, r["VALUE"]
+
+One build serves every test (cached by content); each Bench loads its own PLC instance.
+"""
+
+from __future__ import annotations
+
+import os
+import struct
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[2]
+TESTBENCH = REPO / "tests" / "st_lib" / "testbench.st"
+VECTORS = REPO / "tests" / "vectors"
+MAILBOX = "CONFIG0.RES0.CAN0"
+PROG = "BENCH"
+CODECS = "CODECS"
+
+if not os.environ.get("IEC2C") and not os.environ.get("MATIEC_HOME") and Path("/opt/matiec-src/iec2c").exists():
+    os.environ["MATIEC_HOME"] = "/opt/matiec-src"     # this machine's hand-built MatIEC (never in the repo)
+
+_builds: dict[str, Any] = {}
+
+
+def available_backends() -> list[str]:
+    from linmot_st import toolchain
+    out = []
+    if toolchain.matiec_available():
+        out.append("matiec")
+    if toolchain.builtin_available():
+        out.append("builtin")
+    return out
+
+
+def bench_build(backend: str = "auto"):
+    """The testbench, built once per backend per session (skips the test when it cannot be built)."""
+    from linmot_st import toolchain
+    if backend == "auto":
+        backends = available_backends()
+        if not backends:
+            pytest.skip("no ST backend: MatIEC's iec2c not found and the builtin compiler is not importable")
+        backend = backends[0]
+    if backend not in _builds:
+        _builds[backend] = toolchain.build(str(TESTBENCH), backend=backend)
+    return _builds[backend]
+
+
+@dataclass
+class Result:
+    done: bool
+    busy: bool
+    error: bool
+    error_id: int
+    scans: int                      # scans from the Execute scan to the one that showed Done/Error, inclusive
+    outputs: dict = field(default_factory=dict)
+    aborted: bool = False
+
+    def __getitem__(self, key: str) -> Any:
+        return self.outputs[key.upper()]
+
+    @property
+    def error_name(self) -> str:
+        from linmot_st.errors import name_of
+        return name_of(self.error_id)
+
+
+class Fb:
+    """One FB instance of the testbench program."""
+
+    def __init__(self, bench: "Bench", name: str):
+        self.bench = bench
+        self.name = name.upper()
+        self.path = f"{PROG}.{self.name}"
+
+    def __getitem__(self, member: str) -> Any:
+        return self.bench.plc[f"{self.path}.{member}"]
+
+    def __setitem__(self, member: str, value: Any) -> None:
+        self.bench.plc[f"{self.path}.{member}"] = value
+
+    def set(self, **inputs: Any) -> None:
+        for k, v in inputs.items():
+            self[k] = v
+
+    def flags(self) -> tuple[bool, bool, bool]:
+        return self["DONE"], self["BUSY"], self["ERROR"]
+
+    def start(self, **inputs: Any) -> None:
+        """Set the inputs and raise Execute (takes effect at the next scan)."""
+        self.set(**inputs)
+        self["EXECUTE"] = True
+
+    def outputs(self) -> dict:
+        return {k.upper(): v for k, v in self.bench.plc[self.path].items()}
+
+    def run(self, max_scans: int = 20_000, release: bool = True, **inputs: Any) -> Result:
+        """Execute with these inputs, step until Done, Error or CommandAborted, then (release) drop
+        Execute and step once. `scans` counts the scans from the Execute scan to the finishing one."""
+        self.start(**inputs)
+        sim = self.bench.sim
+        scans = 0
+        while scans < max_scans:
+            sim.step(1)
+            scans += 1
+            done, busy, error = self.flags()
+            aborted = self._aborted()
+            if done or error or aborted:
+                break
+        else:
+            raise AssertionError(f"{self.name} still busy after {max_scans} scans")
+        out = self.outputs()
+        res = Result(done, busy, error, self["ERRORID"], scans, out, aborted)
+        if release:
+            self["EXECUTE"] = False
+            sim.step(1)
+        return res
+
+    def _aborted(self) -> bool:
+        try:
+            return bool(self["COMMANDABORTED"])
+        except Exception:
+            return False
+
+
+class Bench:
+    """The testbench PLC with `nodes` emulated E1100 drives (node IDs 1..nodes) on one simulated bus."""
+
+    def __init__(self, nodes: int = 1, *, bitrate: int = 500_000, timings: Any = None, backend: str = "auto",
+                 enable: bool = True, drive_kwargs: dict | None = None):
+        from linmot_st.bus import SimBus
+        from linmot_st.cosim import CoSim
+        from linmot_st.emulator import DriveTimings, E1100Drive
+        from linmot_st.plc import Plc
+
+        self.build = bench_build(backend)
+        self.plc = Plc(self.build)
+        self.bus = SimBus(bitrate)
+        self.drives = {}
+        for n in range(1, nodes + 1):
+            drive = E1100Drive(n, timings=timings or DriveTimings.fast(), **(drive_kwargs or {}))
+            self.bus.attach(drive, f"drive{n}")
+            drive.power_on(0)
+            self.drives[n] = drive
+        self.sim = CoSim(self.plc, self.bus, mailbox=MAILBOX)
+        if enable:
+            for n in range(1, nodes + 1):
+                self.plc[f"{PROG}.CH{n}.NODEID"] = n
+                self.plc[f"{PROG}.CH{n}.ENABLE"] = True
+            self.sim.run_until(lambda: all(self.plc[f"{PROG}.AX{n}.BOOTCOUNT"] >= 1
+                                           for n in range(1, nodes + 1)), max_scans=20_000)
+            self.step(2)
+
+    @property
+    def drive(self):
+        return self.drives[1]
+
+    def fb(self, name: str) -> Fb:
+        return Fb(self, name)
+
+    def step(self, n: int = 1) -> None:
+        self.sim.step(n)
+
+    def __getitem__(self, path: str) -> Any:
+        return self.plc[f"{PROG}.{path}"]
+
+    def __setitem__(self, path: str, value: Any) -> None:
+        self.plc[f"{PROG}.{path}"] = value
+
+    def set_setpoints(self, values: list[int], var: str = "SP") -> None:
+        self[var] = list(values) + [0] * (1000 - len(values))
+
+    def sdo_trace(self, node: int = 1, since_ns: int = 0) -> list:
+        """(request, answer) trace entries of one node's SDO traffic after since_ns, in bus order."""
+        ids = (0x600 + node, 0x580 + node)
+        return [e for e in self.bus.trace if e.frame.can_id in ids and e.start_ns >= since_ns and e.status != "error"]
+
+
+def exchanges(trace: list, node: int = 1) -> int:
+    """Complete request/answer pairs of a node in a trace slice."""
+    return sum(1 for e in trace if e.frame.can_id == 0x580 + node)
+
+
+def u32_words_to_bytes(words: list[str]) -> bytes:
+    return b"".join(struct.pack("<I", int(w, 16)) for w in words)

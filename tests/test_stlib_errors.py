@@ -1,0 +1,47 @@
+"""The ErrorID numbers: one table (linmot_st.errors) from which st_lib/types/errors.st and the table in
+docs/st-library.md are generated; this test fails when they diverge, and checks the numbers the compiled
+library actually holds."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
+from stbench import bench_build  # noqa: E402
+
+from linmot_st import errors  # noqa: E402
+
+
+def test_generated_files_match_the_table():
+    assert errors.check() == [], "run: python -m linmot_st.errors --write"
+
+
+def test_st_file_holds_every_number():
+    parsed = errors.parse_st(errors.ST_FILE.read_text())
+    assert parsed == {e.name: e.value for e in errors.ERRORS}
+
+
+def test_numbers_and_names_unique():
+    values = [e.value for e in errors.ERRORS]
+    assert len(values) == len(set(values))
+    names = [e.name.upper() for e in errors.ERRORS]        # ST identifiers are case-insensitive
+    assert len(names) == len(set(names))
+    for e in errors.ERRORS:
+        assert 0 <= e.value <= 0xFFFF and e.value >> 8 in (0, 1, 2, 3, 4, 5), e
+
+
+def test_compiled_library_holds_the_same_numbers():
+    from linmot_st.plc import Plc
+    plc = Plc(bench_build())
+    compiled = plc["BENCH.RD.E"]                           # T_LmErrorIds of an FB instance
+    assert {k.upper(): v for k, v in compiled.items()} == {e.name.upper(): e.value for e in errors.ERRORS}
+
+
+def test_describe():
+    assert errors.describe(0x0104).startswith("16#0104 curve ID outside 1..100")
+    assert "D4h" in errors.describe(0x04D4)
+    assert errors.describe(0x04AB) == "16#04AB E1100 result code ABh"
+    assert "06010002h attempt to write a read only object" in errors.describe(0x0302, 0x06010002)
+    assert errors.name_of(0x04AB) == "ResultABh"
+    assert errors.describe(0x7777).startswith("unknown")
