@@ -76,3 +76,26 @@ def test_vector(vector):
             assert answer == expected, f"{where}: got {answer.hex(' ') if answer else answer}"
             if "response_after_s" in step:
                 assert abs(link.t - t0 - int(step["response_after_s"] * S)) <= TOLERANCE_NS, where
+
+
+def test_vectors_cover_every_service_result_and_abort_code():
+    from linmot_st.emulator import codes
+    from linmot_st.emulator.manufacturer import SERVICES
+
+    subs, results, aborts = set(), set(), set()
+    for v in VECTORS["vectors"]:
+        for s in v["steps"]:
+            if "request" not in s:
+                continue
+            req = bytes.fromhex(s["request"])
+            if len(req) >= 4 and 0x2000 <= req[1] | req[2] << 8 <= 0x5FFF:
+                subs.add(req[3])
+            if s["response"]:
+                resp = bytes.fromhex(s["response"])
+                if resp[0] == 0x60:
+                    results.add(resp[6])
+                if resp[0] == 0x80:
+                    aborts.add(int.from_bytes(resp[4:8], "little"))
+    assert set(SERVICES) <= subs
+    assert set(codes.RESULT_NAMES) <= results
+    assert set(codes.ABORT_NAMES) <= aborts
