@@ -71,13 +71,16 @@ def find() -> Matiec | None:
 
 @functools.lru_cache(maxsize=None)
 def flags(iec2c: Path) -> tuple[str, ...]:
-    """Beremiz's choice: whichever of -f -l -p the help lists; plus `-O l` (#line directives into the
-    ST files, so gcc errors and the debug line table point at ST lines) when listed."""
+    """Beremiz's choice: whichever of -f -l -p the help lists; plus, when listed, `-O l` (#line
+    directives into the ST files, so gcc errors and the debug line table point at ST lines) and `-O p`."""
     proc = subprocess.run([str(iec2c), "-h"], capture_output=True, text=True, check=False)
     help_text = proc.stdout + proc.stderr
     chosen = [f for f in WANTED_FLAGS if re.search(rf"^\s*{f}\b", help_text, re.M)]
-    if re.search(r"^\s*-O\b", help_text, re.M) and re.search(r"^\s*l\s*:", help_text, re.M):
-        chosen += ["-O", "l"]
+    if re.search(r"^\s*-O\b", help_text, re.M):
+        # p: one .c per POU, so the POUs compile in parallel units (generate() groups them)
+        out = [o for o in ("l", "p") if re.search(rf"^\s*{o}\s*:", help_text, re.M)]
+        if out:
+            chosen += ["-O", ",".join(out)]
     return tuple(chosen)
 
 
@@ -354,15 +357,32 @@ class ManifestBuilder:
         return ref
 
 
+def read_with_local_includes(path: Path, seen: set[Path] | None = None) -> str:
+    """A header with the headers it includes from its own folder inlined (POUS.h includes one header
+    per POU under -O p)."""
+    seen = set() if seen is None else seen
+    seen.add(path)
+    out = []
+    for line in path.read_text().splitlines():
+        m = re.match(r'^\s*#include\s+"([^"]+)"', line)
+        inc = path.parent / m[1] if m else None
+        if inc is not None and inc.is_file() and inc not in seen:
+            out.append(read_with_local_includes(inc, seen))
+        else:
+            out.append(line)
+    return "\n".join(out)
+
+
 def describe(out_dir: Path, generated: list[Path], sources: Sources, m: Matiec,
-             backend_version: str) -> tuple[dict, str]:
-    """(manifest, plc_tables.c source) for iec2c's output in out_dir."""
+             backend_version: str) -> tuple[dict, str, list[Root]]:
+    """(manifest, plc_tables.c source, roots) for iec2c's output in out_dir; `generated` are the
+    configuration and resource units."""
     ct = CTypes()
     for header in ("iec_std_FB.h",):   # the standard FBs (TON, CTU...) as the generated code sees them
         path = m.include / header
         if path.is_file():
             parse_header(path.read_text(), ct, header)
-    parse_header((out_dir / "POUS.h").read_text(), ct)
+    parse_header(read_with_local_includes(out_dir / "POUS.h"), ct)
     decls = st_decls.scan_paths(sources.files, sources.root)
     roots, tick_ns = parse_roots(out_dir, generated, ct)
     builder = ManifestBuilder(ct, decls, {r.ctype for r in roots if r.how == "PROGRAM"})
@@ -387,7 +407,7 @@ def describe(out_dir: Path, generated: list[Path], sources: Sources, m: Matiec,
     }
     if builder.warnings:
         manifest["warnings"] = builder.warnings
-    return manifest, tables_c(roots, [builder.cname[s] for s in size_checks])
+    return manifest, tables_c(roots, [builder.cname[s] for s in size_checks]), roots
 
 
 def tables_c(roots: list[Root], size_exprs: list[str]) -> str:
@@ -420,15 +440,69 @@ def generate(m: Matiec, sources: Sources, out_dir: Path, backend_version: str) -
     text = pous_h.read_text()
     if "#endif //__POUS_H" not in text:   # iec2c writes it only when it meets a CONFIGURATION
         pous_h.write_text(text.rstrip("\n") + "\n#endif //__POUS_H\n")
-    manifest, tables = describe(out_dir, generated, sources, m, backend_version)
+    pou_files = split_pous(out_dir)
+    config_units = [p for p in generated if p.suffix == ".c" and p.name != "POUS.c" and p.name not in pou_files]
+    manifest, tables, roots = describe(out_dir, config_units, sources, m, backend_version)
     tables_path = out_dir / "plc_tables.c"
     tables_path.write_text(tables)
-    units = [p for p in generated if p.suffix == ".c" and p.name != "POUS.c"]
-    if not any(p.name.lower().startswith("config") for p in units):
+    units = list(config_units)
+    has_config = any(p.name.lower().startswith("config") for p in units)
+    if pou_files is None:   # one POUS.c, included by Res0.c (or by the library unit)
+        if not has_config:
+            library = out_dir / "plc_library.c"
+            library.write_text(LIBRARY_UNIT.format(pous='#include "POUS.c"'))
+            units.append(library)
+        return manifest, units, [tables_path]
+    # -O p: POUS.c only includes one .c per POU. Res0.c would compile them all in one unit; instead it
+    # loses that include and the POUs are compiled in balanced groups, in parallel.
+    for unit in units:
+        unit.write_text(re.sub(r'^\s*#include\s+"POUS\.c"\s*$', "", unit.read_text(), flags=re.M))
+    units += pou_units(out_dir, pou_files, roots)
+    if not has_config:
         library = out_dir / "plc_library.c"
-        library.write_text(LIBRARY_UNIT)
+        library.write_text(LIBRARY_UNIT.format(pous=""))
         units.append(library)
     return manifest, units, [tables_path]
+
+
+def split_pous(out_dir: Path) -> list[str] | None:
+    """The per-POU files POUS.c includes when iec2c ran with -O p; None when POUS.c holds the code."""
+    lines = [ln.strip() for ln in (out_dir / "POUS.c").read_text().splitlines()]
+    code = [ln for ln in lines if ln and not ln.startswith(("#line", "//", "/*", "*"))]
+    names = [m[1] for m in (re.match(r'^#include\s+"([^"]+)"$', ln) for ln in code) if m]
+    if not code or len(names) != len(code) or not all((out_dir / n).is_file() for n in names):
+        return None
+    return names
+
+
+def pou_units(out_dir: Path, pou_files: list[str], roots: list[Root]) -> list[Path]:
+    """Group the per-POU .c files into one unit per CPU, balanced by size. Each unit sees what Res0.c
+    showed POUS.c: POUS.h and the accessors of the globals (declared here, defined in Config0.c/Res0.c)."""
+    n = max(1, min(len(pou_files), os.cpu_count() or 1))
+    groups: list[list[str]] = [[] for _ in range(n)]
+    load = [0] * n
+    for name in sorted(pou_files, key=lambda f: -(out_dir / f).stat().st_size):
+        i = load.index(min(load))
+        groups[i].append(name)
+        load[i] += (out_dir / name).stat().st_size
+    protos = []
+    for r in roots:
+        if r.how in ("GLOBAL", "GLOBAL_LOCATED"):
+            protos += [f"extern {r.ctype} *__GET_GLOBAL_{r.name}(void);",
+                       f"extern IEC_BYTE __IS_GLOBAL_{r.name}_FORCED(void);"]
+        elif r.how == "GLOBAL_FB":
+            protos.append(f"extern {r.ctype} *__GET_GLOBAL_{r.name}(void);")
+    units = []
+    for i, group in enumerate(groups):
+        if not group:
+            continue
+        path = out_dir / f"plc_pous_{i}.c"
+        body = "".join(f'#include "{name}"\n' for name in sorted(group, key=pou_files.index))
+        path.write_text('/* Generated by linmot_st.toolchain.matiec: a share of the POUs (iec2c -O p). */\n'
+                        '#include "iec_std_lib.h"\n#include "accessor.h"\n#include "POUS.h"\n'
+                        + "\n".join(dict.fromkeys(protos)) + "\n" + body)
+        units.append(path)
+    return units
 
 
 # A library has no CONFIGURATION, so iec2c writes no Config0.c/Res0.c and nothing includes POUS.c.
@@ -437,9 +511,9 @@ LIBRARY_UNIT = """/* Generated by linmot_st.toolchain.matiec for sources without
 #include "iec_std_lib.h"
 #include "accessor.h"
 #include "POUS.h"
-#include "POUS.c"
+{pous}
 
-void config_init__(void) {}
-void config_run__(unsigned long tick) { (void)tick; }
+void config_init__(void) {{}}
+void config_run__(unsigned long tick) {{ (void)tick; }}
 unsigned long long common_ticktime__ = 0;
 """
