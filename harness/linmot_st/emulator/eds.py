@@ -11,7 +11,7 @@ import sys
 from pathlib import Path
 
 from . import comm as cm
-from .manufacturer import INTEGER32, UNSIGNED8, UNSIGNED32
+from .manufacturer import INTEGER32, UNSIGNED8
 
 SHIPPED_EDS = Path(__file__).with_name("data") / "e1100_co.eds"
 DATE = "01-01-2025"       # fixed: the file is regenerated only when the object dictionary changes
