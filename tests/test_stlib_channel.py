@@ -1,0 +1,328 @@
+"""The channel: serialisation of the FBs of one drive (FIFO), several drives in parallel, timeouts,
+the watchdog for a holder that is no longer called, readiness, reboots, heartbeat, the system FBs, a
+sequencer without wasted scans, and B1100 parameter access."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
+from stbench import Bench, exchanges  # noqa: E402
+
+from linmot_st.bus import Frame  # noqa: E402
+from linmot_st.errors import BY_NAME  # noqa: E402
+
+E = {name: e.value for name, e in BY_NAME.items()}
+LIVE = 0x1005
+MS = 1_000_000
+
+
+def one_outstanding(trace, node=1) -> bool:
+    """Requests and answers of a node strictly alternate on the bus."""
+    kinds = ["req" if e.frame.can_id == 0x600 + node else "ans" for e in trace]
+    return all(k == ("req" if i % 2 == 0 else "ans") for i, k in enumerate(kinds))
+
+
+def finish(b, *names, max_scans=10_000) -> dict:
+    """Step until every named FB shows Done or Error; returns {name: scan index it finished in}."""
+    at = {}
+    for k in range(1, max_scans + 1):
+        b.step(1)
+        for n in names:
+            if n not in at and (b.fb(n)["DONE"] or b.fb(n)["ERROR"]):
+                at[n] = k
+        if len(at) == len(names):
+            return at
+    raise AssertionError(f"not finished: {set(names) - set(at)}")
+
+
+def test_fbs_of_one_drive_take_turns_without_wasted_scans():
+    b = Bench(nodes=1)
+    t0 = b.plc.time_ns
+    b.fb("RD").start(UPID=LIVE)
+    b.fb("RD2").start(UPID=0x1010)
+    b.fb("WR").start(UPID=0x1011, VALUE=900, MEM="LM_RAM")
+    at = finish(b, "RD", "RD2", "WR")
+    assert at == {"RD": 2, "RD2": 3, "WR": 4}          # 3 exchanges, back to back, one scan each
+    trace = b.sdo_trace(since_ns=t0)
+    assert exchanges(trace) == 3 and one_outstanding(trace)
+    assert all(not b.fb(n)["ERROR"] for n in ("RD", "RD2", "WR"))
+    assert (b.fb("RD")["VALUE"], b.fb("RD2")["VALUE"]) == (2000, 400)
+
+
+def test_fifo_order_follows_the_execute_edges_not_the_call_order():
+    b = Bench(nodes=1)
+    b.set_setpoints(list(range(50)))
+    import struct
+    info = list(struct.pack("<HHHH22sHIHHH28s", 70, 3, 50, 4, b"", 9, 5000, 0x1A, 5, 0, b""))
+    b.fb("CA").start(CURVEID=9, INFO=info, DATASIZE=200)       # called after RD in the scan
+    b.step(3)
+    b.fb("WR").start(UPID=LIVE, VALUE=1000, MEM="LM_RAM")      # queued second
+    b.step(1)
+    b.fb("RD").start(UPID=LIVE)                                # queued third, called first in the scan
+    at = finish(b, "CA", "WR", "RD")
+    # WR and RD are called before CA in the scan: each sees its turn in the scan after the release
+    assert at["WR"] == at["CA"] + 2 and at["RD"] == at["WR"] + 2
+    assert b.fb("RD")["VALUE"] == 1000                         # the write was served before the read
+    assert one_outstanding(b.sdo_trace())
+
+
+@pytest.mark.parametrize("bitrate,drives,max_ratio", [
+    (1_000_000, 3, 1.0), (1_000_000, 4, 1.5), (500_000, 2, 1.0), (500_000, 4, 2.0)])
+def test_drives_in_parallel(bitrate, drives, max_ratio):
+    """Curve downloads to several drives at once: each drive still does one exchange per scan as long as
+    the bus carries the 2 x drives SDO frames (about 110..135 bits each) and the drive's turnaround within
+    the 1 ms task interval; beyond that the bus is the limit (serially it would be `drives` x)."""
+    import struct
+    n = 200
+    info = lambda cid: list(struct.pack("<HHHH22sHIHHH28s", 70, 3, n, 4, b"par", cid, 100 * n, 0x1A, 5, 0, b""))
+    b1 = Bench(nodes=1, bitrate=bitrate)
+    b1.set_setpoints(list(range(n)))
+    alone = b1.fb("CA").run(CURVEID=1, INFO=info(1), DATASIZE=4 * n).scans
+    assert alone == 1 + 18 + n + 1
+
+    bn = Bench(nodes=drives, bitrate=bitrate)
+    bn.set_setpoints(list(range(n)))
+    names = ["CA", "CA2", "CA3", "CA4"][:drives]
+    for k, name in enumerate(names, start=1):
+        bn.fb(name).start(CURVEID=k, INFO=info(k), DATASIZE=4 * n)
+    at = finish(bn, *names)
+    for k, name in enumerate(names, start=1):
+        assert bn.fb(name)["DONE"] and bn.drives[k].curves.ram[k].setpoints == list(range(n))
+        assert one_outstanding(bn.sdo_trace(node=k), node=k)
+    ratio = max(at.values()) / alone
+    print(f"\n{bitrate} bit/s, {drives} drives: {sorted(at.values())} scans, one drive alone {alone} (x{ratio:.2f})")
+    assert ratio <= max_ratio
+
+
+def test_sdo_timeout_then_the_channel_serves_again():
+    b = Bench(nodes=1)
+    b["CH1.SDOTIMEOUT"] = 50 * MS
+    b.bus.drop(lambda f: f.can_id == 0x581, count=1)
+    r = b.fb("RD").run(UPID=LIVE)
+    assert r.error and r.error_id == E["SdoTimeout"]
+    assert 50 <= r.scans <= 53
+    assert b["AX1.TIMEOUTS"] == 1
+    assert b.fb("RD").run(UPID=LIVE).done
+
+
+def test_holder_that_stops_being_called_is_evicted():
+    b = Bench(nodes=1)
+    b.fb("RD2").start(UPID=LIVE)
+    b.step(1)                                   # RD2 holds the channel, its request is out
+    b["CALLRD2"] = False                        # ... and is no longer called
+    r = b.fb("RD").run(UPID=0x1010)
+    assert r.done and r["VALUE"] == 400
+    assert r.scans <= 2 + 3 + 1                 # served after HolderScans (3) missed scans
+    assert b["AX1.EVICTIONS"] == 1
+    b["CALLRD2"] = True
+    b.step(1)
+    assert b.fb("RD2")["ERROR"] and b.fb("RD2")["ERRORID"] == E["Evicted"]
+
+
+def test_queue_timeout_reports_channel_busy():
+    import struct
+    b = Bench(nodes=1)
+    b["CH1.QUEUETIMEOUT"] = 10 * MS
+    n = 100
+    b.set_setpoints(list(range(n)))
+    info = list(struct.pack("<HHHH22sHIHHH28s", 70, 3, n, 4, b"", 4, 100, 0x1A, 5, 0, b""))
+    b.fb("CA").start(CURVEID=4, INFO=info, DATASIZE=4 * n)
+    b.step(1)
+    r = b.fb("RD").run(UPID=LIVE)
+    assert r.error and r.error_id == E["ChannelBusy"] and 10 <= r.scans <= 12
+    at = finish(b, "CA")
+    assert b.fb("CA")["DONE"]
+    assert b.fb("RD").run(UPID=LIVE).done        # its abandoned ticket does not block the queue
+
+
+def test_not_ready_and_bad_node_id():
+    b = Bench(nodes=1)
+    b["CH1.ENABLE"] = False
+    t0 = b.plc.time_ns
+    r = b.fb("RD").run(UPID=LIVE)
+    assert r.error and r.error_id == E["ChannelDisabled"] and r.scans == 1
+    b["CH1.NODEID"] = 0
+    b["CH1.ENABLE"] = True
+    b.step(1)
+    assert b["CH1.ERROR"] and b["CH1.ERRORID"] == E["InvalidNodeId"] and not b["CH1.READY"]
+    r = b.fb("WR").run(UPID=LIVE, VALUE=1)
+    assert r.error and r.error_id == E["InvalidNodeId"] and r.scans == 1
+    assert b.sdo_trace(since_ns=t0) == []
+    b["CH1.NODEID"] = 1
+    b.step(1)
+    assert b["CH1.READY"] and b.fb("RD").run(UPID=LIVE).done
+
+
+def test_channel_disabled_while_a_service_runs():
+    import struct
+    b = Bench(nodes=1)
+    n = 100
+    b.set_setpoints(list(range(n)))
+    info = list(struct.pack("<HHHH22sHIHHH28s", 70, 3, n, 4, b"", 4, 100, 0x1A, 5, 0, b""))
+    b.fb("CA").start(CURVEID=4, INFO=info, DATASIZE=4 * n)
+    b.step(10)
+    b["CH1.ENABLE"] = False
+    b.step(1)
+    assert b.fb("CA")["ERROR"] and b.fb("CA")["ERRORID"] == E["ChannelDisabled"]
+
+
+def test_drive_reboot_during_a_transfer():
+    import struct
+    b = Bench(nodes=1)
+    n = 300
+    b.set_setpoints(list(range(n)))
+    info = list(struct.pack("<HHHH22sHIHHH28s", 70, 3, n, 4, b"", 4, 100, 0x1A, 5, 0, b""))
+    b.fb("CA").start(CURVEID=4, INFO=info, DATASIZE=4 * n)
+    b.step(20)
+    b.bus.reset_node("drive1", b.plc.time_ns)
+    at = finish(b, "CA")
+    assert b.fb("CA")["ERRORID"] == E["DriveRebooted"]
+    assert b["AX1.BOOTCOUNT"] == 2
+    b.fb("CA")["EXECUTE"] = False
+    b.step(2)
+    assert b.fb("RD").run(UPID=LIVE).done      # the channel sent NMT Start again: usable
+
+
+def test_reset_waits_for_the_boot_up_and_restarts_the_node():
+    b = Bench(nodes=1)
+    assert b.fb("WR").run(UPID=LIVE, VALUE=1500, MEM="LM_RAM").done
+    t0 = b.plc.time_ns
+    r = b.fb("RST").run()
+    assert r.done, r
+    assert b.drive.ram(LIVE) == 2000                       # RAM reloaded from ROM
+    frames = [e for e in b.bus.trace if e.start_ns >= t0]
+    boot = [e for e in frames if e.frame.can_id == 0x701 and e.frame.data == b"\x00"]
+    start = [e for e in frames if e.frame.can_id == 0x000 and e.frame.data == b"\x01\x01"]
+    assert boot and start and start[0].start_ns > boot[0].start_ns
+    assert b.drive.nmt_state == "OPERATIONAL"
+    # Done in the scan after the boot-up message ended on the bus
+    assert (t0 + (r.scans - 1) * b.plc.tick_ns) - boot[0].end_ns < b.plc.tick_ns
+
+
+def test_reset_without_autostart_sends_nmt_start_itself():
+    b = Bench(nodes=1)
+    b["CH1.AUTOSTART"] = False
+    t0 = b.plc.time_ns
+    assert b.fb("RST").run().done
+    starts = [e for e in b.bus.trace if e.start_ns >= t0 and e.frame.can_id == 0]
+    assert len(starts) == 1 and b.drive.nmt_state == "OPERATIONAL"
+
+
+def test_reset_boot_timeout():
+    b = Bench(nodes=1)
+    b.bus.drop(lambda f: f.can_id == 0x701)
+    r = b.fb("RST").run(BOOTTIMEOUT=100 * MS)
+    assert r.error and r.error_id == E["BootTimeout"]
+
+
+def test_mc_stop_and_start():
+    b = Bench(nodes=1)
+    assert b.drive.mc_phase == "running"
+    assert b.fb("MST").run().done and b.drive.mc_phase == "stopped"
+    assert b.fb("MSA").run().done and b.drive.mc_phase == "running"
+
+
+def test_heartbeat_loss_makes_the_channel_not_ready():
+    b = Bench(nodes=1)
+    assert b.fb("WR").run(UPID=0x2020, VALUE=1, MEM="LM_ROM").done
+    assert b.fb("WR").run(UPID=0x2021, VALUE=10, MEM="LM_ROM").done
+    b["CH1.HEARTBEATTIMEOUT"] = 50 * MS
+    assert b.fb("RST").run().done                           # the drive produces heartbeats after boot
+    b.step(100)
+    assert b["CH1.READY"] and b["CH1.NMTSTATE"] == 0x05
+    b.bus.remove_node("drive1", b.plc.time_ns)
+    b.step(60)
+    assert not b["CH1.READY"] and b["CH1.ERRORID"] == E["NodeLost"]
+    r = b.fb("RD").run(UPID=LIVE)
+    assert r.error and r.error_id == E["NodeLost"]
+
+
+def test_sequencer_chains_services_without_wasted_scans():
+    b = Bench(nodes=1)
+    upids = [0x1005, 0x1010, 0x1011, 0x1020, 0x0430]     # live parameters: RAM+ROM writes accepted
+    values = [1800, 300, 700, -100, 1]
+    b["SEQUPIDS"] = upids + [0] * 11
+    b["SEQVALUES"] = values + [0] * 11
+    b["SEQN"] = len(upids)
+    t0 = b.plc.time_ns
+    b["SEQRUN"] = True
+    b.sim.run_until(lambda: b["SEQDONE"] or b["SEQERROR"], max_scans=100)
+    assert b["SEQDONE"] and b["SEQERROR"] == 0
+    assert b["SEQSCANS"] == len(upids) + 1                 # 5 exchanges in 5 consecutive scans
+    starts = [e.start_ns for e in b.sdo_trace(since_ns=t0) if e.frame.can_id == 0x601]
+    assert len(starts) == 5 and {y - x for x, y in zip(starts, starts[1:])} == {b.plc.tick_ns}
+    assert [b.drive.rom(u) for u in upids] == values
+
+
+class FakeB1100:
+    """Just enough of a B1100: boot-up, NMT, and parameter access through 2000h sub C0h, 01h, 02h."""
+
+    def __init__(self, node_id: int):
+        self.node_id = node_id
+        self.ram = {0xE9E7: -292 & 0xFFFFFFFF, 0x7078: 0, 0x2CA1: 1, 0x2C96: 3, 0x2C97: 1}
+        self.rom = dict(self.ram)
+        self.selected = None
+        self.requests = []
+
+    def power_on(self, t):
+        return [(t + MS, Frame(0x700 + self.node_id, b"\x00"))]
+
+    def on_frame(self, frame, t):
+        if frame.can_id != 0x600 + self.node_id:
+            return []
+        d = frame.data
+        self.requests.append(bytes(d))
+        index, sub = int.from_bytes(d[1:3], "little"), d[3]
+
+        def answer(data):
+            return [(t + 100_000, Frame(0x580 + self.node_id, data))]
+        if index != 0x2000 or sub not in (0x01, 0x02, 0xC0):
+            return answer(bytes([0x80]) + d[1:4] + (0x06090011).to_bytes(4, "little"))
+        if sub == 0xC0:
+            self.selected = int.from_bytes(d[4:6], "little")
+            return answer(bytes([0x60]) + d[1:4] + bytes(4))
+        store = self.ram if sub == 1 else self.rom
+        if d[0] == 0x40:
+            return answer(bytes([0x43]) + d[1:4] + store.get(self.selected, 0).to_bytes(4, "little"))
+        store[self.selected] = int.from_bytes(d[4:8], "little")
+        return answer(bytes([0x60]) + d[1:4] + bytes(4))
+
+    def on_timer(self, t):
+        return []
+
+    def next_timer_ns(self):
+        return None
+
+
+def test_b1100_parameter_access_through_c0h():
+    b = Bench(nodes=0, enable=False)
+    fake = FakeB1100(63)
+    b.bus.attach(fake, "b1100")
+    b.bus.call_at(0, lambda t: b.bus._queue_all(b.bus._parts_by_name["b1100"], t, fake.power_on(t)))
+    b["CH1.NODEID"] = 63
+    b["CH1.DRIVE"] = "LM_B1100"
+    b["CH1.ENABLE"] = True
+    b.sim.run_until(lambda: b["AX1.BOOTCOUNT"] >= 1, max_scans=100)
+    r = b.fb("RD").run(UPID=0xE9E7, MEM="LM_RAM")
+    assert r.done and r["VALUE"] == -292 and r.scans == 3               # select + read
+    assert fake.requests[-2] == bytes.fromhex("23 00 20 C0 E7 E9 00 00")
+    assert fake.requests[-1] == bytes.fromhex("40 00 20 01 00 00 00 00")
+    r = b.fb("WR").run(UPID=0xE9E7, VALUE=-100, MEM="LM_RAM_ROM")
+    assert r.done and r.scans == 4                                       # select + RAM + ROM
+    assert fake.ram[0xE9E7] == fake.rom[0xE9E7] == -100 & 0xFFFFFFFF
+    r = b.fb("SWR").run(UPID=0x7078, COUNT=3, TEXT="X Axis Left", MEM="LM_RAM")
+    assert r.done                                                        # B1100: stringlet 1 = the UPID
+    assert [fake.ram[u] for u in (0x7078, 0x7079, 0x707A)] == [0x78412058, 0x4C207369, 0x00746665]
+    assert b.fb("SRD").run(UPID=0x7078, COUNT=3)["TEXT"] == "X Axis Left"
+    for fb, inputs in [("RD", dict(UPID=1, MEM="LM_MIN")), ("CG", dict(CURVEID=1)), ("CTRD", dict(ENTRY=1)),
+                       ("DEF", dict(LAYER=1)), ("UL", dict(STARTUPID=0)), ("CTPRES", {}), ("FS", dict(CURVES=True))]:
+        r = b.fb(fb).run(**inputs)
+        assert r.error and r.scans == 1, fb
+        assert r.error_id in (E["NotSupported"], E["InvalidMem"]), fb
+    lc = b.fb("LC").run(LAYER=1, CHECK=True, SOURCE={"TREEID": 1, "MAINVERSION": 3, "SUBVERSION": 0})
+    assert lc.done and lc.scans == 7                                     # 3 x (select + read), B1100 UPIDs
+    assert lc["DRIVE"] == {"TREEID": 1, "MAINVERSION": 3, "SUBVERSION": 1} and lc["COMPATIBLE"]
