@@ -108,7 +108,8 @@ def build(path: str | os.PathLike, backend: str = "auto", out: str | os.PathLike
                                chosen) from None
         builtin_dir = _TOOLCHAIN_DIR / "builtin"
         generator = [p for p in builtin_dir.rglob("*") if p.suffix in (".py", ".lark", ".c", ".h")]
-        backend_version = getattr(builtin, "__version__", "") or _code_digest(generator)[:16]
+        version_fn = getattr(builtin, "backend_version", None)
+        backend_version = version_fn() if callable(version_fn) else "builtin-" + _code_digest(generator)[:16]
         flags = []
 
     key = _cache.make_key({
