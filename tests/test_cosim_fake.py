@@ -35,7 +35,8 @@ class FakePlc:
         self.vars = {}
         for box in ("RX", "TX"):
             for i in range(1, 33):
-                self.vars.update({f"{MB}.{box}[{i}].ID": 0, f"{MB}.{box}[{i}].DLC": 0, f"{MB}.{box}[{i}].RTR": False})
+                self.vars.update({f"{MB}.{box}[{i}].ID": 0, f"{MB}.{box}[{i}].DLC": 0, f"{MB}.{box}[{i}].RTR": False,
+                                  f"{MB}.{box}[{i}].DATA": None})   # the array itself: no byte access here
                 self.vars.update({f"{MB}.{box}[{i}].DATA[{j}]": 0 for j in range(8)})
         self.vars.update({f"{MB}.{n}": 0 for n in ("RXCOUNT", "RXLOST", "TXCOUNT", "TXLOST")})
         self.program = program

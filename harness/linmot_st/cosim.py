@@ -50,8 +50,13 @@ class Mailbox:
         self._tx: list[tuple | None] = [None] * (MAILBOX_FRAMES + 1)
 
     def _bind(self, which: str, i: int) -> tuple:
+        """(Id, Dlc, Rtr, Data) accessors of one frame slot. Data is the whole ARRAY[0..7] OF BYTE when
+        the loader offers raw byte access (one call per frame), else a list of its 8 elements."""
         var, p = self.plc.var, f"{self.path}.{which}[{i}]"
-        return (var(f"{p}.Id"), var(f"{p}.Dlc"), var(f"{p}.Rtr"), [var(f"{p}.Data[{j}]") for j in range(8)])
+        data = var(f"{p}.Data")
+        if not (hasattr(data, "write_bytes") and hasattr(data, "read_bytes") and getattr(data, "nbytes", 0) == 8):
+            data = [var(f"{p}.Data[{j}]") for j in range(8)]
+        return (var(f"{p}.Id"), var(f"{p}.Dlc"), var(f"{p}.Rtr"), data)
 
     @property
     def rx_count(self) -> int:
@@ -79,9 +84,12 @@ class Mailbox:
             slot[0].value = frame.can_id
             slot[1].value = len(frame.data)
             slot[2].value = frame.rtr
-            data = frame.data
-            for j, byte_var in enumerate(slot[3]):
-                byte_var.value = data[j] if j < len(data) else 0
+            data, dst = frame.data, slot[3]
+            if type(dst) is list:
+                for j, byte_var in enumerate(dst):
+                    byte_var.value = data[j] if j < len(data) else 0
+            else:
+                dst.write_bytes(data if len(data) == 8 else data.ljust(8, b"\0"))
         self._rx_count.value = n
         return lost
 
@@ -108,7 +116,13 @@ class Mailbox:
                 self._tx_count.value = 0
                 raise CoSimError(f"{self.path}.Tx[{i}]: Id {can_id:#x} Dlc {dlc} is not a CAN 2.0A frame "
                                  f"(Id 0..16#7FF, Dlc 0..8)")
-            data = bytes(slot[3][j].value for j in range(dlc)) if dlc else b""
+            src = slot[3]
+            if not dlc:
+                data = b""
+            elif type(src) is list:
+                data = bytes(src[j].value for j in range(dlc))
+            else:
+                data = src.read_bytes()[:dlc]
             frames.append(Frame(can_id, data, slot[2].value))
         self._tx_count.value = 0
         return frames
