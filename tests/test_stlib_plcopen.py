@@ -1,0 +1,244 @@
+"""PLCopen conformance of every service FB (spec/conventions.md), data-driven over a table of FBs:
+edge latching, exclusive outputs, Done/Error held while Execute stays TRUE, one-scan Done/Error pulse when
+Execute fell before the end, re-trigger while Busy ignored, outputs reset on the falling edge, Abort."""
+
+from __future__ import annotations
+
+import json
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
+from stbench import VECTORS, Bench, Fb  # noqa: E402
+
+from linmot_st.emulator import build_entry  # noqa: E402
+
+MS = 1_000_000
+SEED = json.loads((VECTORS / "curve_info.json").read_text())["curves"][0]
+SEED_INFO = list(bytes.fromhex(SEED["info_block"]))
+ENTRY = list(build_entry(0x0103, bytes(32), name="conf"))
+
+
+def seed_setpoints(b: Bench) -> None:
+    b.set_setpoints(SEED["setpoints"])
+
+
+def seed_curve_on_drive(b: Bench) -> None:
+    seed_setpoints(b)
+    assert b.fb("CA").run(CURVEID=23, INFO=SEED_INFO, DATASIZE=40).done
+
+
+def ct_entry_on_drive(b: Bench) -> None:
+    assert b.fb("CTWR").run(ENTRY=5, BLOCK=ENTRY).done
+
+
+@dataclass
+class Spec:
+    name: str
+    inputs: dict
+    alt: dict | None = None                  # other inputs, set while Busy: must change nothing
+    bad: dict | None = None                  # invalid inputs: Error before any frame
+    setup: Callable[[Bench], None] | None = None
+    abort: bool = False                      # has Abort / CommandAborted
+    fail: dict = field(default_factory=dict)  # extra inputs for the timeout error run
+    polls: bool = False                      # polls a busy drive: the number of polls depends on timing
+
+
+SPECS = [
+    Spec("RD", dict(UPID=0x1005, MEM="LM_RAM"), dict(UPID=0x1010, MEM="LM_ROM"), dict(UPID=0x4000)),
+    Spec("WR", dict(UPID=0x1005, VALUE=1500, MEM="LM_RAM"), dict(VALUE=1600), dict(MEM="LM_MIN")),
+    Spec("SRD", dict(UPID=0x03E8, COUNT=8, MEM="LM_RAM"), dict(COUNT=2), dict(COUNT=0)),
+    Spec("SWR", dict(UPID=0x03F2, COUNT=8, TEXT="conformance", MEM="LM_RAM_ROM"), dict(TEXT="other"), dict(COUNT=40)),
+    Spec("DEF", dict(LAYER=3), dict(LAYER=1), dict(LAYER=9), fail=dict(TIMEOUT=20 * MS)),
+    Spec("UL", dict(MODIFIED=False, STARTUPID=0x2000, ENDUPID=0x2EFF), dict(ENDUPID=0x2010),
+         dict(STARTUPID=0x3000, ENDUPID=0x2000), abort=True),
+    Spec("CA", dict(CURVEID=23, INFO=SEED_INFO, DATASIZE=40), dict(CURVEID=24), dict(CURVEID=0),
+         setup=seed_setpoints, abort=True),
+    Spec("CAF", dict(CURVEID=5, NAME="conf", OBJECTTYPE=3, XLENGTH=1000, NUMSETPOINTS=10), dict(NAME="other"),
+         dict(NUMSETPOINTS=1), setup=seed_setpoints, abort=True),
+    Spec("CG", dict(CURVEID=23), dict(CURVEID=24), dict(CURVEID=0), setup=seed_curve_on_drive, abort=True),
+    Spec("CDA", {}),
+    Spec("FS", dict(CURVES=True, COMMANDTABLE=False, POLLINTERVAL=0), dict(COMMANDTABLE=True),
+         dict(CURVES=False, COMMANDTABLE=False), fail=dict(MCTIMEOUT=20 * MS), polls=True),
+    Spec("CTWR", dict(ENTRY=5, BLOCK=ENTRY), dict(ENTRY=6), dict(ENTRY=256), abort=True),
+    Spec("CTWRF", dict(ENTRY=5, HEADER=0x0103, NAME="conf"), dict(NAME="other"), dict(NAME="x" * 17), abort=True),
+    Spec("CTRD", dict(ENTRY=5), dict(ENTRY=6), dict(ENTRY=256), setup=ct_entry_on_drive, abort=True),
+    Spec("CTDEL", dict(ENTRY=5), dict(ENTRY=6), dict(ENTRY=256), setup=ct_entry_on_drive),
+    Spec("CTDELALL", {}),
+    Spec("CTPRES", {}),
+    Spec("LC", dict(LAYER=2, CHECK=True, SOURCE={"TREEID": 4612, "MAINVERSION": 3, "SUBVERSION": 0}),
+         dict(LAYER=1), dict(LAYER=0)),
+    Spec("MST", {}, fail=dict(TIMEOUT=20 * MS)),
+    Spec("MSA", {}, fail=dict(TIMEOUT=20 * MS)),
+    Spec("RST", {}, fail=dict(BOOTTIMEOUT=40 * MS)),
+    Spec("SDO", dict(INDEX=0x1018, SUBINDEX=1, WRITE=False), dict(SUBINDEX=2), dict(INDEX=0)),
+    Spec("CMD", dict(SUBINDEX=0x41, E1100ONLY=True), dict(SUBINDEX=0x81), dict(INPUTERROR=0x0101)),
+]
+IDS = [s.name for s in SPECS]
+
+
+def bench(spec: Spec) -> Bench:
+    b = Bench(nodes=1)
+    if spec.setup:
+        spec.setup(b)
+    return b
+
+
+def outputs(fb: Fb) -> tuple:
+    aborted = fb._aborted()
+    return fb["DONE"], fb["BUSY"], fb["ERROR"], aborted, fb["ERRORID"]
+
+
+def assert_exclusive(state: tuple) -> None:
+    done, busy, error, aborted, error_id = state
+    assert done + busy + error + aborted <= 1, state
+    assert (error_id != 0) == error, state
+
+
+def requests(b: Bench, t0: int, polls: bool = False) -> list[bytes]:
+    """The node's SDO requests since t0; with `polls`, repeated identical requests (flash polls) count once."""
+    out = [bytes(e.frame.data) for e in b.sdo_trace(since_ns=t0) if e.frame.can_id == 0x601]
+    if polls:
+        out = [r for i, r in enumerate(out) if i == 0 or r != out[i - 1]]
+    return out
+
+
+def run_recording(b: Bench, fb: Fb, execute_scans: int | None, max_scans: int = 5000,
+                  retrigger_at: int | None = None, alt_at: dict | None = None) -> list[tuple]:
+    """Step with Execute TRUE for `execute_scans` scans (None: until the end), recording the outputs each
+    scan; stops 3 scans after the FB finished. Execute goes low at `retrigger_at` and high again after it."""
+    states, end = [], None
+    for k in range(1, max_scans + 1):
+        if retrigger_at is not None:
+            fb["EXECUTE"] = k != retrigger_at
+        else:
+            fb["EXECUTE"] = execute_scans is None or k <= execute_scans
+        if alt_at and k == 2:
+            fb.set(**alt_at)
+        b.step(1)
+        s = outputs(fb)
+        assert_exclusive(s)
+        states.append(s)
+        if end is None and (s[0] or s[2] or s[3]):
+            end = k
+        if end is not None and k >= end + 3:
+            return states
+    raise AssertionError(f"{fb.name} did not finish")
+
+
+@pytest.mark.parametrize("spec", SPECS, ids=IDS)
+def test_done_held_while_execute_then_reset_on_falling_edge(spec):
+    b = bench(spec)
+    fb = b.fb(spec.name)
+    fb.set(**spec.inputs)
+    states = run_recording(b, fb, execute_scans=None)
+    first = next(i for i, s in enumerate(states) if s[0])
+    assert all(s[1] for s in states[:first]), "Busy from the Execute scan until Done"
+    assert all(s[0] and not s[1] for s in states[first:]), "Done held while Execute stays TRUE"
+    fb["EXECUTE"] = False
+    b.step(1)
+    assert outputs(fb) == (False, False, False, False, 0)
+
+
+@pytest.mark.parametrize("spec", SPECS, ids=IDS)
+def test_done_is_a_one_scan_pulse_when_execute_fell_before(spec):
+    b = bench(spec)
+    fb = b.fb(spec.name)
+    fb.set(**spec.inputs)
+    states = run_recording(b, fb, execute_scans=1)
+    assert [s[0] for s in states].count(True) == 1
+    first = next(i for i, s in enumerate(states) if s[0])
+    assert all(s[1] for s in states[:first])
+    assert states[first + 1:] == [(False, False, False, False, 0)] * (len(states) - first - 1)
+
+
+@pytest.mark.parametrize("spec", SPECS, ids=IDS)
+def test_retrigger_while_busy_is_ignored(spec):
+    ref = bench(spec)
+    t0 = ref.plc.time_ns
+    assert ref.fb(spec.name).run(**spec.inputs).done
+    reference = requests(ref, t0, spec.polls)
+
+    b = bench(spec)
+    b.bus.delay(lambda f: f.can_id == 0x581, 3 * MS)            # keep every FB busy for several scans
+    fb = b.fb(spec.name)
+    fb.set(**spec.inputs)
+    t0 = b.plc.time_ns
+    states = run_recording(b, fb, execute_scans=None, retrigger_at=3)
+    assert [s[0] for s in states].count(True) == len(states) - next(i for i, s in enumerate(states) if s[0])
+    assert not any(s[2] for s in states)
+    b.step(20)
+    assert requests(b, t0, spec.polls) == reference                        # one run, the same frames
+
+
+@pytest.mark.parametrize("spec", [s for s in SPECS if s.alt], ids=[s.name for s in SPECS if s.alt])
+def test_inputs_are_latched_at_the_rising_edge(spec):
+    ref = bench(spec)
+    t0 = ref.plc.time_ns
+    assert ref.fb(spec.name).run(**spec.inputs).done
+    reference = requests(ref, t0, spec.polls)
+
+    b = bench(spec)
+    b.bus.delay(lambda f: f.can_id == 0x581, 3 * MS)
+    fb = b.fb(spec.name)
+    fb.set(**spec.inputs)
+    t0 = b.plc.time_ns
+    states = run_recording(b, fb, execute_scans=None, alt_at=spec.alt)
+    assert any(s[0] for s in states) and not any(s[2] for s in states)
+    assert requests(b, t0, spec.polls) == reference
+
+
+@pytest.mark.parametrize("spec", [s for s in SPECS if s.bad], ids=[s.name for s in SPECS if s.bad])
+def test_invalid_input_error_held_then_reset(spec):
+    b = bench(spec)
+    fb = b.fb(spec.name)
+    fb.set(**{**spec.inputs, **spec.bad})
+    t0 = b.plc.time_ns
+    states = run_recording(b, fb, execute_scans=None)
+    assert states[0][2] and states[0][4] != 0                  # Error in the Execute scan itself
+    assert all(s[2] for s in states)                           # held while Execute stays TRUE
+    assert requests(b, t0) == []
+    fb["EXECUTE"] = False
+    b.step(1)
+    assert outputs(fb) == (False, False, False, False, 0)
+
+
+@pytest.mark.parametrize("spec", SPECS, ids=IDS)
+def test_error_is_a_one_scan_pulse_when_execute_fell_before(spec):
+    b = bench(spec)
+    b["CH1.SDOTIMEOUT"] = 20 * MS
+    b.bus.drop(lambda f: f.can_id == 0x581)                    # the drive's answers never arrive
+    if spec.name == "RST":
+        b.bus.drop(lambda f: f.can_id == 0x701)
+    fb = b.fb(spec.name)
+    fb.set(**{**spec.inputs, **spec.fail})
+    states = run_recording(b, fb, execute_scans=1)
+    assert [s[2] for s in states].count(True) == 1
+    first = next(i for i, s in enumerate(states) if s[2])
+    assert all(s[1] for s in states[:first])
+    assert states[first + 1:] == [(False, False, False, False, 0)] * (len(states) - first - 1)
+
+
+@pytest.mark.parametrize("spec", [s for s in SPECS if s.abort], ids=[s.name for s in SPECS if s.abort])
+def test_abort(spec):
+    b = bench(spec)
+    b.bus.delay(lambda f: f.can_id == 0x581, 3 * MS)
+    fb = b.fb(spec.name)
+    fb.start(**spec.inputs)
+    b.step(2)
+    assert fb["BUSY"]
+    fb["ABORT"] = True
+    b.step(1)
+    s = outputs(fb)
+    assert_exclusive(s)
+    assert s[3] and not s[1]
+    b.step(3)
+    assert fb["COMMANDABORTED"]                                # held while Execute stays TRUE
+    fb.set(EXECUTE=False, ABORT=False)
+    b.step(1)
+    assert outputs(fb) == (False, False, False, False, 0)
+    assert b.fb("RD").run(UPID=0x1005).done                    # the channel is free again
