@@ -69,10 +69,11 @@ def run_all(only: list[str] | None = None, out=sys.stdout) -> int:
         print("no benchmarks ran", file=out)
         return 1 if broken else 0
     width = max(len(r["name"]) for _, r in rows)
-    print(f"{'area':<11} {'figure':<{width}} {'value':>14} {'unit':<10} {'target':<14} ", file=out)
+    uw = max(4, *(len(str(r.get("unit", ""))) for _, r in rows))
+    print(f"{'area':<11} {'figure':<{width}} {'value':>14} {'unit':<{uw}} {'target':<14} ", file=out)
     for area, r in rows:
         target = r.get("target")
-        print(f"{area:<11} {r['name']:<{width}} {_fmt(r['value']):>14} {r.get('unit', ''):<10} "
+        print(f"{area:<11} {r['name']:<{width}} {_fmt(r['value']):>14} {r.get('unit', ''):<{uw}} "
               f"{str(target) if target is not None else '-':<14} {verdict(r['value'], target)}", file=out)
     return 1 if broken else 0
 
