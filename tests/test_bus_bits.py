@@ -78,7 +78,7 @@ ISO16845_FRAMES = [
     Frame(0x47F, b"\x1F"),
     Frame(0x758, b""),
     Frame(0x777, b"\x1F"),
-    Frame(0x7EF, b"\x00\x00", rtr=True),
+    Frame(0x7EF, rtr=True, rtr_dlc=2),
 ]
 
 
@@ -89,7 +89,7 @@ def test_iso16845_stuffing_frames(f):
 
 
 def test_remote_frame_has_dlc_but_no_data_field():
-    f = Frame(0x701, b"\x00", rtr=True)
+    f = Frame(0x701, rtr=True, rtr_dlc=1)
     bits = frame_bits(f)
     assert bits[12] == 1 and bits[15:19] == [0, 0, 0, 1]
     assert len(bits) == 34
@@ -100,3 +100,17 @@ def test_sdo_frames_stay_within_the_bounds():
     lengths = {bus_bits(Frame(0x601, bytes(rng.randrange(256) for _ in range(8)))) for _ in range(500)}
     assert min(lengths) >= 111 and max(lengths) <= 135
     assert len(lengths) > 5   # stuffing really depends on the content
+
+
+def test_remote_frame_keeps_its_dlc_through_python_can_and_in_its_bit_length():
+    import can
+
+    from linmot_st.bus import Frame
+    from linmot_st.bus.bits import frame_length_bits
+
+    msg = can.Message(arbitration_id=0x701, is_extended_id=False, is_remote_frame=True, dlc=1)
+    frame = Frame.from_message(msg)
+    assert (frame.rtr, frame.dlc, frame.data) == (True, 1, b"")
+    assert frame.to_message().dlc == 1
+    # the DLC field's bits are stuffed like any others: DLC 1 and DLC 0 frames may differ only by stuffing
+    assert frame_length_bits(frame) >= 34 + 10 and frame_length_bits(Frame(0x701, rtr=True)) >= 44

@@ -115,7 +115,7 @@ def _header(can_id: int, rtr: bool, dlc: int) -> tuple[int, int, int]:
 
 def stuff_bit_count(frame: Frame) -> int:
     """Number of stuff bits the transmitter inserts into this frame."""
-    crc, state, stuffed = _header(frame.can_id, frame.rtr, len(frame.data))
+    crc, state, stuffed = _header(frame.can_id, frame.rtr, frame.dlc)
     if not frame.rtr:
         stuff8, crc8 = _STUFF8, _CRC8
         for byte in frame.data:

@@ -55,14 +55,14 @@ def flip_bit(byte_index: int = 0, bit: int = 0) -> Callable[[Frame], Frame]:
             return frame
         data = bytearray(frame.data)
         data[byte_index] ^= 1 << bit
-        return Frame(frame.can_id, bytes(data), frame.rtr)
+        return Frame(frame.can_id, bytes(data), frame.rtr, frame.rtr_dlc)
 
     return mutate
 
 
 def with_data(data: bytes) -> Callable[[Frame], Frame]:
     """A `mutate` function for mutate_payload: replaces the data (e.g. a short DLC)."""
-    return lambda frame: Frame(frame.can_id, bytes(data), frame.rtr)
+    return lambda frame: Frame(frame.can_id, bytes(data), frame.rtr, frame.rtr_dlc)
 
 
 def match_id(*can_ids: int) -> Predicate:

@@ -14,16 +14,21 @@ class Frame:
     can_id: int          # 11-bit identifier (COB-ID)
     data: bytes = b""    # 0..8 bytes; the DLC is its length
     rtr: bool = False    # remote transmission request (node guarding)
+    rtr_dlc: int = 0     # a remote frame carries a DLC but no data: the length it asks for
 
     def __post_init__(self) -> None:
         if not 0 <= self.can_id <= 0x7FF:
             raise ValueError(f"CAN identifier {self.can_id:#x} is not an 11-bit identifier")
         if len(self.data) > 8:
             raise ValueError(f"CAN frame carries at most 8 data bytes, got {len(self.data)}")
+        if self.rtr and self.data:
+            raise ValueError("a remote frame carries no data (give its DLC as rtr_dlc)")
+        if not 0 <= self.rtr_dlc <= 8 or (self.rtr_dlc and not self.rtr):
+            raise ValueError(f"rtr_dlc {self.rtr_dlc} is only for remote frames, 0..8")
 
     @property
     def dlc(self) -> int:
-        return len(self.data)
+        return self.rtr_dlc if self.rtr else len(self.data)
 
     def __str__(self) -> str:  # candump style: 601#2301205046000A00
         return f"{self.can_id:03X}#" + ("R" if self.rtr else self.data.hex().upper())
@@ -32,8 +37,10 @@ class Frame:
         import can
 
         return can.Message(arbitration_id=self.can_id, data=self.data, is_extended_id=False,
-                           is_remote_frame=self.rtr, dlc=len(self.data), timestamp=timestamp)
+                           is_remote_frame=self.rtr, dlc=self.dlc, timestamp=timestamp)
 
     @classmethod
     def from_message(cls, msg) -> "Frame":
-        return cls(msg.arbitration_id, bytes(msg.data), bool(msg.is_remote_frame))
+        if msg.is_remote_frame:
+            return cls(msg.arbitration_id, b"", True, msg.dlc)
+        return cls(msg.arbitration_id, bytes(msg.data))

@@ -48,7 +48,7 @@ class EchoNode:
         if frame.can_id != self.request_id:
             return ()
         self.count += 1
-        return [(t_ns, Frame(self.reply_id, frame.data, frame.rtr))]
+        return [(t_ns, Frame(self.reply_id, frame.data, frame.rtr, frame.rtr_dlc))]
 
     def on_timer(self, t_ns: int):
         return ()
