@@ -28,7 +28,10 @@ def destuff(bits: list[int]) -> list[int]:
     return out
 
 
-frames = st.builds(Frame, st.integers(0, 0x7FF), st.binary(max_size=8), st.booleans())
+frames = st.one_of(
+    st.builds(Frame, st.integers(0, 0x7FF), st.binary(max_size=8)),
+    st.builds(lambda i, n: Frame(i, rtr=True, rtr_dlc=n), st.integers(0, 0x7FF), st.integers(0, 8)),
+)
 
 
 def test_crc15_check_value():
