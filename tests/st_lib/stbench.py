@@ -5,7 +5,8 @@ with emulated E1100 drives, and a handle per FB instance that drives its PLCopen
     r = b.fb("RD").run(UPID=0x1194)    # Execute, step until Done/Error, Execute off
     r.done, r.error, r.error_id, r.scans, r["VALUE"]
 
-One build serves every test (cached by content); each Bench loads its own PLC instance.
+One build serves every test (cached by content); each Bench loads its own PLC instance. The suite runs on
+MatIEC when iec2c is found, else on the builtin compiler; STLIB_BACKEND=builtin|matiec forces one.
 """
 
 from __future__ import annotations
@@ -44,6 +45,8 @@ def available_backends() -> list[str]:
 def bench_build(backend: str = "auto"):
     """The testbench, built once per backend per session (skips the test when it cannot be built)."""
     from linmot_st import toolchain
+    if backend == "auto":
+        backend = os.environ.get("STLIB_BACKEND", "auto")      # run the suite on one backend: matiec | builtin
     if backend == "auto":
         backends = available_backends()
         if not backends:
