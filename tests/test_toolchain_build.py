@@ -232,3 +232,34 @@ def test_matiec_missing_call_wrapper_is_an_error_at_the_st_line(tmp_path):
     diags = info.value.diagnostics
     assert any(DIAGNOSTIC.match(d) and ("prog.st:19:" in d or "prog.st:20:" in d) for d in diags), diags
     assert any("MatIEC defect" in d for d in diags)
+
+
+@pytest.mark.parametrize("backend", BACKEND_PARAMS)
+def test_named_configuration_and_two_tasks(backend, tmp_path):
+    """Any CONFIGURATION/RESOURCE names; the tick is the GCD of the task intervals and each task runs at
+    its own multiple of it, from the first scan."""
+    src = """
+    PROGRAM Counter
+      VAR
+        N : INT;
+      END_VAR
+      N := N + 1;
+    END_PROGRAM
+
+    CONFIGURATION Plant
+      VAR_GLOBAL
+        G : INT := 3;
+      END_VAR
+      RESOURCE Cpu ON PLC
+        TASK Fast(INTERVAL := T#2ms, PRIORITY := 0);
+        TASK Slow(INTERVAL := T#6ms, PRIORITY := 1);
+        PROGRAM A WITH Fast : Counter;
+        PROGRAM B WITH Slow : Counter;
+      END_RESOURCE
+    END_CONFIGURATION
+    """
+    plc = Plc(build_text(src, tmp_path, backend))
+    assert plc.tick_ns == 2_000_000
+    assert set(plc.roots()) >= {"PLANT.CPU.A", "PLANT.CPU.B", "PLANT.G"}
+    plc.step(7)
+    assert (plc["PLANT.CPU.A.N"], plc["B.N"], plc["G"]) == (7, 3, 3)

@@ -164,6 +164,11 @@ _MEMBER_MACRO = re.compile(r"^__DECLARE_(VAR|EXTERNAL|LOCATED|EXTERNAL_FB)\(\s*(
 _MEMBER_PLAIN = re.compile(r"^(\w+)\s+(\w+)\s*;$")
 
 
+def is_configuration_unit(path: Path) -> bool:
+    """The unit iec2c names after the CONFIGURATION (Config0.c, Plant.c...): it defines config_init__."""
+    return path.suffix == ".c" and path.name != "POUS.c" and "void config_init__(" in path.read_text()
+
+
 def parse_header(text: str, into: CTypes | None = None, origin: str = "POUS.h") -> CTypes:
     ct = into or CTypes()
     text = _LINE_DIRECTIVE.sub("", text)
@@ -223,7 +228,7 @@ _LOCATED = re.compile(r"__LOCATED_VAR\(\s*(\w+)\s*,\s*(\w+)\s*,\s*([IQM])\s*,\s*
 
 
 def parse_roots(out_dir: Path, generated: list[Path], ctypes_: CTypes) -> tuple[list[Root], int]:
-    configs = [p for p in generated if p.suffix == ".c" and p.name != "POUS.c" and p.name.lower().startswith("config")]
+    configs = [p for p in generated if is_configuration_unit(p)]
     config_name = configs[0].stem.upper() if configs else "CONFIG0"
     roots: list[Root] = []
     programs: dict[str, str] = {}
@@ -446,7 +451,7 @@ def generate(m: Matiec, sources: Sources, out_dir: Path, backend_version: str) -
     tables_path = out_dir / "plc_tables.c"
     tables_path.write_text(tables)
     units = list(config_units)
-    has_config = any(p.name.lower().startswith("config") for p in units)
+    has_config = any(is_configuration_unit(p) for p in units)
     if pou_files is None:   # one POUS.c, included by Res0.c (or by the library unit)
         if not has_config:
             library = out_dir / "plc_library.c"
