@@ -263,3 +263,27 @@ def test_named_configuration_and_two_tasks(backend, tmp_path):
     assert set(plc.roots()) >= {"PLANT.CPU.A", "PLANT.CPU.B", "PLANT.G"}
     plc.step(7)
     assert (plc["PLANT.CPU.A.N"], plc["B.N"], plc["G"]) == (7, 3, 3)
+
+
+def test_cache_commit_keeps_a_valid_entry_a_concurrent_builder_made(tmp_path):
+    from linmot_st.toolchain.cache import LIBRARY_NAME, MANIFEST_NAME, Cache
+    cache = Cache(tmp_path)
+    src = tmp_path / "a.st"
+    src.write_text("x")
+    meta = {"sources_read": {str(src): __import__("hashlib").sha256(b"x").hexdigest()}}
+    first = cache.staging()
+    (first / LIBRARY_NAME).write_text("first")
+    (first / MANIFEST_NAME).write_text("{}")
+    entry = cache.commit("ab" * 32, first, meta)
+    second = cache.staging()
+    (second / LIBRARY_NAME).write_text("second")
+    (second / MANIFEST_NAME).write_text("{}")
+    assert cache.commit("ab" * 32, second, meta) == entry
+    assert (entry / LIBRARY_NAME).read_text() == "first" and not second.exists()
+    src.write_text("changed")                       # now the entry is stale: a new commit replaces it
+    assert cache.lookup("ab" * 32) is None
+    third = cache.staging()
+    (third / LIBRARY_NAME).write_text("third")
+    (third / MANIFEST_NAME).write_text("{}")
+    cache.commit("ab" * 32, third, {"sources_read": {}})
+    assert (entry / LIBRARY_NAME).read_text() == "third"

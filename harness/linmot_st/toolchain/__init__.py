@@ -158,6 +158,9 @@ def _compile(chosen: str, tool, src: _sources.Sources, store: _cache.Cache, key:
             all_units = units + plain_units
             include_dirs = [c_dir, tool.include]
             read = list(src.files)
+            if not trap_flags_supported():
+                manifest.setdefault("warnings", []).append(
+                    "array indices are not checked: the C compiler has no trapping bounds sanitizer")
         else:
             manifest, all_units, read = _builtin_generate(src, c_dir)
             unit_flags, include_dirs = {}, [c_dir]
@@ -192,6 +195,10 @@ def _explain_matiec_c_errors(diags: list[str]) -> list[str]:
             "gets no wrapper and shifts the numbering of the later ones). Assign such a call's result to a "
             "variable first, then convert it."]
     return diags
+
+
+def trap_flags_supported() -> bool:
+    return bool(cc.bounds_trap_flags())
 
 
 def _builtin_generate(src: _sources.Sources, c_dir: Path) -> tuple[dict, list[Path], list[Path]]:

@@ -73,7 +73,11 @@ class Cache:
         (staging / META_NAME).write_text(json.dumps(meta, indent=1, sort_keys=True))
         entry = self.entry(key)
         entry.parent.mkdir(parents=True, exist_ok=True)
-        if entry.exists():   # stale (sources changed behind the key) or a concurrent builder won
+        if entry.exists() and self.lookup(key) is not None:
+            # a concurrent builder committed the same build first: keep theirs, which may be in use
+            shutil.rmtree(staging, ignore_errors=True)
+            return entry
+        if entry.exists():   # stale: a source the include scan missed has changed since
             old = entry.with_name(entry.name + f".old-{os.getpid()}-{id(staging)}")
             try:
                 os.rename(entry, old)
