@@ -97,7 +97,7 @@ def build(path: str | os.PathLike, backend: str = "auto", out: str | os.PathLike
                                 f"(set IEC2C or MATIEC_HOME, or put iec2c on PATH)"], chosen)
         backend_version = matiec.version(tool)
         generator = [_TOOLCHAIN_DIR / "matiec.py", _TOOLCHAIN_DIR / "st_decls.py"]
-        flags = list(matiec.flags(tool.iec2c)) + cc.bounds_trap_flags() + ["-Werror=implicit-function-declaration"]
+        flags = list(matiec.flags(tool.iec2c)) + _matiec_unit_flags()
     else:
         tool = None
         try:
@@ -151,10 +151,7 @@ def _compile(chosen: str, tool, src: _sources.Sources, store: _cache.Cache, key:
                 manifest, units, plain_units = matiec.generate(tool, src, c_dir, backend_version)
             except matiec.MatiecError as exc:
                 raise CompileError(exc.diagnostics, chosen) from None
-            # MatIEC sometimes calls a helper it never declares (and never defines): with an implicit
-            # `int` declaration the C would compile and misbehave, so that is an error at the ST line
-            strict = cc.bounds_trap_flags() + ["-Werror=implicit-function-declaration"]
-            unit_flags = {u: strict for u in units}
+            unit_flags = {u: _matiec_unit_flags() for u in units}
             all_units = units + plain_units
             include_dirs = [c_dir, tool.include]
             read = list(src.files)
@@ -195,6 +192,13 @@ def _explain_matiec_c_errors(diags: list[str]) -> list[str]:
             "gets no wrapper and shifts the numbering of the later ones). Assign such a call's result to a "
             "variable first, then convert it."]
     return diags
+
+
+def _matiec_unit_flags() -> list[str]:
+    """Flags of the units iec2c wrote: an index out of range traps (the glue reports kind 2); and since
+    MatIEC sometimes calls a helper it never declares (nor defines), an implicit `int` declaration, which
+    would compile into wrong code, is an error at the ST line."""
+    return cc.bounds_trap_flags() + ["-Werror=implicit-function-declaration"]
 
 
 def trap_flags_supported() -> bool:
