@@ -75,6 +75,7 @@ def test_drive_refusals_end_in_sdo_abort(b, upid, value, mem, abort):
     r = b.fb("WR").run(UPID=upid, VALUE=value, MEM=mem)
     assert r.error and not r.done and r.error_id == E["SdoAbort"]
     assert r["ABORTCODE"] == abort
+    assert b.fb("WR")["ABORTCODE"] == 0                     # reset with the other outputs after Execute fell
     if before is not None:
         assert (b.drive.params[upid].ram, b.drive.params[upid].rom) == before
 
