@@ -26,9 +26,6 @@ MAILBOX = "CONFIG0.RES0.CAN0"
 PROG = "BENCH"
 CODECS = "CODECS"
 
-if not os.environ.get("IEC2C") and not os.environ.get("MATIEC_HOME") and Path("/opt/matiec-src/iec2c").exists():
-    os.environ["MATIEC_HOME"] = "/opt/matiec-src"     # this machine's hand-built MatIEC (never in the repo)
-
 _builds: dict[str, Any] = {}
 
 
