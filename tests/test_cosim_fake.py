@@ -158,7 +158,7 @@ def test_rx_overflow_counts_rx_lost():
 
 
 def test_tx_order_and_rtr_and_short_dlc():
-    frames = [Frame(0x700, b"\x01\x02"), Frame(0x100, b""), Frame(0x701, b"", rtr=True)]
+    frames = [Frame(0x700, b"\x01\x02"), Frame(0x100, b""), Frame(0x701, rtr=True, rtr_dlc=1)]
 
     def program(plc):
         if plc.scan_count == 0:

@@ -78,13 +78,13 @@ def test_echo_program_on_the_simulated_bus(echo_build):
     plc = Plc(echo_build)
     bus = SimBus()
     frames = [Frame(0x181, bytes([1, 2, 3])), Frame(0x281, bytes(range(8))), Frame(0x301, b""),
-              Frame(0x701, b"", rtr=True)]
+              Frame(0x701, rtr=True, rtr_dlc=1)]
     node = ScriptedNode([(100_000 + k * 1_000_000, f) for k, f in enumerate(frames)])
     bus.attach(node, "node")
     sim = CoSim(plc, bus, mailbox=MB)
     sim.step(10)
     got = [f for _, f in node.received]
-    assert got == [Frame(f.can_id + 1, f.data, f.rtr) for f in frames]
+    assert got == [Frame(f.can_id + 1, f.data, f.rtr, f.rtr_dlc) for f in frames]
     # sent at 0.1 ms + k ms, delivered by the scan at (k + 1) ms, echoed at that scan's time
     echoes = [e for e in bus.trace if e.sender == "plc"]
     assert [e.start_ns for e in echoes] == [(k + 1) * 1_000_000 for k in range(4)]

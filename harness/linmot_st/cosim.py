@@ -82,7 +82,7 @@ class Mailbox:
             slot = rx[i + 1] or self._bind_rx(i + 1)
             frame = frames[i]
             slot[0].value = frame.can_id
-            slot[1].value = len(frame.data)
+            slot[1].value = frame.dlc
             slot[2].value = frame.rtr
             data, dst = frame.data, slot[3]
             if type(dst) is list:
@@ -117,6 +117,9 @@ class Mailbox:
                 raise CoSimError(f"{self.path}.Tx[{i}]: Id {can_id:#x} Dlc {dlc} is not a CAN 2.0A frame "
                                  f"(Id 0..16#7FF, Dlc 0..8)")
             src = slot[3]
+            if slot[2].value:  # a remote frame: a DLC, no data
+                frames.append(Frame(can_id, b"", True, dlc))
+                continue
             if not dlc:
                 data = b""
             elif type(src) is list:
