@@ -294,6 +294,10 @@ class Checker:
         if isinstance(init, A.StructInit):
             if not isinstance(ty, (T.Struct, T.PouType)):
                 self.error(init.pos, f"a structure initialiser for a variable of type {T.describe(ty)}")
+            if isinstance(ty, T.Struct):
+                self.error(init.pos, "initialising the fields of a STRUCT value is outside the supported subset "
+                                     "(MatIEC rejects most of them): give the STRUCT type default values, or "
+                                     "assign the fields in the body")
             seen = set()
             for fname, pos, value in init.items:
                 k = fname.upper()
@@ -384,7 +388,9 @@ class Checker:
                 en.init = A.Literal(node.pos, "bool", True, None, "TRUE")
                 pou.vars["EN"] = en
                 if node.kind == "FUNCTION_BLOCK":
-                    pou.vars["ENO"] = Var("ENO", "ENO", T.BOOL, "VAR_OUTPUT", node.pos, pou=pou, implicit=True)
+                    eno = Var("ENO", "ENO", T.BOOL, "VAR_OUTPUT", node.pos, pou=pou, implicit=True)
+                    eno.init = en.init          # TRUE before the first call, as MatIEC initialises it
+                    pou.vars["ENO"] = eno
                 else:
                     del pou.vars["EN"]     # programs have no EN/ENO
             for block in node.blocks:
@@ -442,15 +448,26 @@ class Checker:
                 self.error(decl.spec.pos, "a FUNCTION cannot hold function block instances")
             if kind in ("VAR_OUTPUT", "VAR_EXTERNAL", "VAR_TEMP"):
                 self.error(decl.spec.pos, f"function block instances in {kind} are outside the supported subset")
+            if kind in ("VAR_INPUT", "VAR_IN_OUT"):
+                self.error(decl.spec.pos, f"a function block instance as {kind} is outside the supported subset "
+                                          "(iec2c crashes on calls that pass one)")
             if qual == "CONSTANT":
                 self.error(decl.pos, "a function block instance cannot be CONSTANT")
             if pou is not None and ty.pou is pou:
                 self.error(decl.spec.pos, f"{pou.name} cannot contain an instance of itself")
+            if len(decl.names) > 2:
+                self.error(decl.names[2][1], "declare at most two function block instances in one declaration "
+                                             "(iec2c crashes on three or more): write one declaration per instance")
         if decl.location:
             self.check_location(decl.location, ty, decl.pos, owner)
+        if pou is not None and pou.kind == "FUNCTION" and kind == "VAR_INPUT" and isinstance(ty, T.Array):
+            self.error(decl.spec.pos, "an ARRAY as VAR_INPUT of a FUNCTION is outside the supported subset (MatIEC "
+                                      "generates C that does not compile); use VAR_IN_OUT")
         if decl.init is not None:
             if kind in ("VAR_EXTERNAL", "VAR_IN_OUT"):
                 self.error(decl.init.pos, f"a {kind} variable cannot have an initial value")
+            if kind == "VAR_TEMP":
+                self.error(decl.init.pos, "VAR_TEMP variables cannot have an initial value (MatIEC rejects it)")
             self.const_value(decl.init, ty)
         out = []
         for name, pos in decl.names:
@@ -496,10 +513,10 @@ class Checker:
 
     def locate(self, v: Var) -> None:
         cell = self.located.get(v.location)
-        if cell is None:
-            self.located[v.location] = LocatedCell(v.location, v.ty, v.pos)
-        elif not T.same(cell.ty, v.ty):
-            self.error(v.pos, f"{v.location} is already located with type {T.describe(cell.ty)}")
+        if cell is not None:
+            self.error(v.pos, f"{v.location} is already declared at {cell.pos.file}:{cell.pos.line} "
+                              "(MatIEC rejects a second variable at the same address)")
+        self.located[v.location] = LocatedCell(v.location, v.ty, v.pos)
 
     # ------------------------------------------------------------------ configuration
     def declare_config(self, node: A.Configuration) -> None:
@@ -793,6 +810,10 @@ class Checker:
                     else:
                         self.coerce(a.value, p.ty, what)
                 elif p.kind == "VAR_IN_OUT":
+                    if pou.kind == "FUNCTION" and _has_index(a.value):
+                        self.error(a.value.pos, f"{what}: an array element as VAR_IN_OUT of a FUNCTION is outside the "
+                                                "supported subset (MatIEC generates C that does not compile); copy "
+                                                "it to a variable first")
                     t = self.lvalue(a.value, what, in_out=True)
                     if not T.same(t, p.ty) or (isinstance(p.ty, T.PouType) and t is not p.ty):
                         self.error(a.value.pos, f"{what}: type mismatch, expected {T.describe(p.ty)}, "
@@ -830,6 +851,13 @@ class Checker:
         v = root.sym
         if v.constant:
             self.error(e.pos, f"{what}: '{v.name}' is CONSTANT")
+        node = e
+        while isinstance(node, (A.Member, A.Index)):
+            if isinstance(node, A.Member) and isinstance(node.base.ty, T.PouType) and node.sym.kind == "VAR_OUTPUT" \
+                    and not in_out and what == "assignment":
+                self.error(node.pos, f"assignment to the output '{node.name}' of a function block instance "
+                                     "(MatIEC rejects it)")
+            node = node.base
         if isinstance(e, A.Name) and v.is_fb_instance and not in_out:
             if what == "assignment":
                 self.error(e.pos, "assigning a whole function block instance is outside the supported subset")
@@ -913,6 +941,11 @@ class Checker:
         tn = e.type_name
         if e.kind == "wstring":
             self.error(e.pos, "WSTRING literals are outside the supported subset")
+        if e.kind == "time" and re.search(r"(?i)\d(us|ns)", e.text):
+            self.error(e.pos, f"{e.text}: the units us and ns are outside the supported subset (MatIEC knows d, h, m, "
+                              "s and ms)")
+        if e.kind == "string":
+            self.check_string_escapes(e)
         if tn is None:
             if e.kind == "string":
                 return self._string_lit(e)
@@ -940,6 +973,25 @@ class Checker:
                 self.error(e.pos, f"{tn}#{e.text}: not a {tn} literal")
             return self._string_lit(e)
         self.error(e.pos, f"invalid typed literal {tn}#{e.text}")
+
+    def check_string_escapes(self, e: A.Literal) -> None:
+        """Escapes that MatIEC turns into C that does not compile or means something else."""
+        raw = e.text[1:-1]
+        i = 0
+        while i < len(raw):
+            if raw[i] == "$" and i + 1 < len(raw):
+                nxt = raw[i + 1]
+                if nxt in "Ll":
+                    self.error(e.pos, "the escape $L is outside the supported subset (MatIEC writes a raw line "
+                                      "break into the C); use $N")
+                # MatIEC writes $N and $hh as C's \xHH, which swallows a hexadecimal digit that follows
+                width = 1 if nxt in "Nn" else (2 if re.fullmatch(r"[0-9A-Fa-f]{2}", raw[i + 1:i + 3]) else 0)
+                if width and re.match(r"[0-9A-Fa-f]", raw[i + 1 + width:i + 2 + width]):
+                    self.error(e.pos, f"'${raw[i + 1:i + 1 + width]}' followed by a hexadecimal digit is outside the "
+                                      "supported subset (MatIEC's C reads the digit as part of the escape)")
+                i += 1 + max(width, 1)
+                continue
+            i += 1
 
     def _string_lit(self, e: A.Literal) -> T.Type:
         if len(e.value) > T.STR_MAX_LEN:
@@ -1158,6 +1210,8 @@ class Checker:
     # ------------------------------------------------------------------ function calls
     def infer_Call(self, e: A.Call) -> T.Type:
         k = e.name.upper()
+        if self.cur is not None and k == self.cur.key:
+            self.error(e.pos, f"recursive call of {self.cur.name} (recursion is outside the supported subset)")
         v = self.lookup_var(k)
         if v is not None:
             self.error(e.pos, f"'{e.name}' is a variable: a function block instance is called as a statement")
@@ -1411,6 +1465,14 @@ class Checker:
         if n in ("LEN", "FIND"):
             return T.poly(T.INTS, T.INT)
         return T.STRING
+
+
+def _has_index(e: A.Node) -> bool:
+    while isinstance(e, (A.Member, A.Index)):
+        if isinstance(e, A.Index):
+            return True
+        e = e.base
+    return False
 
 
 def _selectable(t: T.Type) -> bool:

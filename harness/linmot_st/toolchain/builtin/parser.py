@@ -631,6 +631,12 @@ def _syntax_diagnostic(exc: lark.UnexpectedInput, text: str, file: str) -> Diagn
     if isinstance(exc, lark.UnexpectedToken):
         tok = exc.token
         word = str(tok).upper()
+        # an unsupported word that the lexer took for an identifier makes the *next* token unexpected
+        before = re.search(r"([A-Za-z_]\w*)\s*$", text[:offset])
+        if before and before.group(1).upper() in UNSUPPORTED_WORDS and word not in UNSUPPORTED_WORDS:
+            bl = text.count("\n", 0, before.start(1)) + 1
+            bc = before.start(1) - (text.rfind("\n", 0, before.start(1)) + 1) + 1
+            return Diagnostic(file, bl, bc, f"{UNSUPPORTED_WORDS[before.group(1).upper()]} is outside the supported subset")
         if word in UNSUPPORTED_WORDS:
             return Diagnostic(file, line, col, f"{UNSUPPORTED_WORDS[word]} is outside the supported subset")
         if tok.type == "PRAGMA":

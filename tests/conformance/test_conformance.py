@@ -1,0 +1,183 @@
+"""Language conformance: every case of cases/ on every available backend, and builtin vs MatIEC.
+
+See conformance_lib.py for the case format. Run cases are batched: one build per backend and task
+interval. A MatIEC defect known from spec/matiec.md is written into its case (matiec-defect /
+matiec-expect) and checked as such, never skipped.
+"""
+
+from __future__ import annotations
+
+import tempfile
+from pathlib import Path
+
+import pytest
+
+from conformance_lib import Case, all_cases, batch_source, single_source
+from linmot_st.plc import Plc, PlcFault
+from linmot_st.toolchain import CompileError, build
+from linmot_st.toolchain.testing import MATIEC_MISSING, matiec_available
+
+CASES = all_cases()
+RUN = [c for c in CASES if c.kind == "run"]
+REJECT = [c for c in CASES if c.kind == "reject"]
+FAULT = [c for c in CASES if c.kind == "fault"]
+
+HAVE_MATIEC = matiec_available()
+BACKENDS = [
+    pytest.param("builtin"),
+    pytest.param("matiec", marks=[pytest.mark.matiec, pytest.mark.skipif(not HAVE_MATIEC, reason=MATIEC_MISSING)]),
+]
+WORK = Path(tempfile.gettempdir()) / "linmot-st-conformance"
+
+
+def _write(folder: Path, name: str, text: str) -> Path:
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / name
+    if not path.exists() or path.read_text() != text:
+        path.write_text(text)
+    return path
+
+
+class Outcome:
+    def __init__(self):
+        self.values: dict[int, dict[str, object]] = {}
+        self.snapshots: dict[int, object] = {}
+        self.error: str | None = None
+
+
+def _run(cases: list[Case], backend: str, source: str, folder: Path, name: str) -> dict[str, Outcome]:
+    outcomes = {c.name: Outcome() for c in cases}
+    res = build(_write(folder, name, source), backend=backend)
+    plc = Plc(res)
+    checkpoints = sorted({n for c in cases for n in (*c.expects, *c.matiec_expects)})
+    done = 0
+    for n in checkpoints:
+        plc.step(n - done)
+        done = n
+        for c in cases:
+            if n in c.expects or n in c.matiec_expects:
+                o = outcomes[c.name]
+                paths = set(c.expects.get(n, {})) | set(c.matiec_expects.get(n, {}))
+                o.values[n] = {p: plc[c.path_of(p)] for p in paths}
+                if not c.own_config:
+                    o.snapshots[n] = plc[f"CONF.RES.{c.instance}"]
+    return outcomes
+
+
+_results: dict[str, dict[str, Outcome]] = {}
+
+
+def results(backend: str) -> dict[str, Outcome]:
+    """Run every run-case on a backend (once per session)."""
+    if backend in _results:
+        return _results[backend]
+    out: dict[str, Outcome] = {}
+    folder = WORK / backend
+    batches: dict[str, list[Case]] = {}
+    for c in RUN:
+        if c.own_config:
+            out.update(_guarded([c], backend, lambda c=c: _run([c], backend, c.text, folder / c.name, "case.st")))
+        else:
+            batches.setdefault(c.interval, []).append(c)
+    for i, (interval, cases) in enumerate(sorted(batches.items())):
+        try:
+            out.update(_run(cases, backend, batch_source(cases, interval), folder / f"batch{i}", "batch.st"))
+        except (CompileError, ValueError):
+            # find the culprit(s): each case on its own
+            for c in cases:
+                out.update(_guarded([c], backend, lambda c=c: _run([c], backend, single_source(c),
+                                                                    folder / c.name, "case.st")))
+    _results[backend] = out
+    return out
+
+
+def _guarded(cases, backend, fn) -> dict[str, Outcome]:
+    try:
+        return fn()
+    except (CompileError, PlcFault, ValueError) as exc:
+        o = {}
+        for c in cases:
+            o[c.name] = Outcome()
+            o[c.name].error = f"{type(exc).__name__}: {exc}"
+        return o
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+@pytest.mark.parametrize("case", RUN, ids=[c.name for c in RUN])
+def test_run(case: Case, backend: str):
+    outcome = results(backend)[case.name]
+    assert outcome.error is None, f"{case.name} ({case.title}) failed on {backend}:\n{outcome.error}"
+    for scans, values in case.expected(backend).items():
+        got = outcome.values[scans]
+        for path, want in values.items():
+            assert _equal(got[path], want), (f"{case.name} ({case.title}), {backend}, after {scans} scan(s): "
+                                              f"{path} = {got[path]!r}, expected {want!r}")
+
+
+@pytest.mark.matiec
+@pytest.mark.skipif(not HAVE_MATIEC, reason=MATIEC_MISSING)
+@pytest.mark.parametrize("case", RUN, ids=[c.name for c in RUN])
+def test_differential(case: Case):
+    """Both backends leave every variable of the case's program in the same state."""
+    a, b = results("builtin")[case.name], results("matiec")[case.name]
+    if a.error or b.error:
+        pytest.fail(f"not comparable: builtin: {a.error}; matiec: {b.error}")
+    skip = case.excluded_from_diff()
+    for scans in a.snapshots:
+        da, db = _drop(a.snapshots[scans], skip), _drop(b.snapshots[scans], skip)
+        assert _equal(da, db), f"{case.name} after {scans} scan(s): builtin {da} != matiec {db}"
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+@pytest.mark.parametrize("case", REJECT, ids=[c.name for c in REJECT])
+def test_reject(case: Case, backend: str):
+    path = _write(WORK / backend / "reject", f"{case.name}.st", single_source(case))
+    if backend == "matiec" and case.matiec_accepts:
+        build(path, backend=backend)      # a documented difference: MatIEC accepts it
+        return
+    with pytest.raises(CompileError) as info:
+        build(path, backend=backend)
+    text = str(info.value)
+    if backend == "builtin":
+        first = info.value.diagnostics[0]
+        assert case.reject.lower() in text.lower(), f"{case.name}: expected {case.reject!r} in:\n{text}"
+        if case.reject_line is not None:
+            assert f":{case.reject_line}:" in first, f"{case.name}: expected line {case.reject_line}:\n{text}"
+        assert first.startswith(f"{path.name}:") or ":" in first
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+@pytest.mark.parametrize("case", FAULT, ids=[c.name for c in FAULT])
+def test_fault(case: Case, backend: str):
+    scan, kind, line = case.fault
+    res = build(_write(WORK / backend / "fault", f"{case.name}.st", single_source(case)), backend=backend)
+    plc = Plc(res)
+    if scan > 1:
+        plc.step(scan - 1)
+    with pytest.raises(PlcFault) as info:
+        plc.step(1)
+    f = info.value
+    assert f.kind == kind, f"{case.name}: fault kind {f.kind} ({f}), expected {kind}"
+    assert f.pou.upper() == case.program, f"{case.name}: fault in {f.pou!r}, expected {case.program}"
+    if line is not None and (backend == "builtin" or f.line):
+        assert f.line == line, f"{case.name}: fault at line {f.line}, expected {line}"
+    assert plc.scan_count == scan - 1
+
+
+def _drop(snapshot, skip: set[str]):
+    if isinstance(snapshot, dict):
+        return {k: v for k, v in snapshot.items() if k.upper() not in skip}
+    return snapshot
+
+
+def _equal(a, b) -> bool:
+    if isinstance(a, float) or isinstance(b, float):
+        try:
+            return a == b or abs(a - b) <= 1e-9 * max(1.0, abs(a), abs(b))
+        except TypeError:
+            return False
+    if isinstance(a, dict) and isinstance(b, dict):
+        return a.keys() == b.keys() and all(_equal(a[k], b[k]) for k in a)
+    if isinstance(a, (list, tuple)) and isinstance(b, (list, tuple)):
+        return len(a) == len(b) and all(_equal(x, y) for x, y in zip(a, b))
+    return a == b
