@@ -34,8 +34,19 @@ def _run_show(args: argparse.Namespace) -> int:
     return 0
 
 
+def _add_to_st(p: argparse.ArgumentParser) -> None:
+    from .to_st import add_arguments
+    add_arguments(p)
+
+
+def _run_to_st(args: argparse.Namespace) -> int:
+    from .to_st import run
+    return run(args)
+
+
 COMMANDS = [
     ("show", "print a readable summary of a PVL file (errors as file:line messages)", _add_show, _run_show),
+    ("to-st", "generate the commissioning dataset (ST data for the PLC) from a PVL file", _add_to_st, _run_to_st),
 ]
 
 
