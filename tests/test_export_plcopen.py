@@ -176,14 +176,15 @@ def norm(x):
 
 
 def declarations(elements) -> list:
-    """Types (out of their TYPE blocks), POUs and configurations, in order; pragmas dropped."""
-    out = []
+    """The types (out of their TYPE blocks), then the POUs and configurations, each in source order;
+    pragmas dropped. PLCopen keeps types and POUs in two lists, so their interleaving is not kept."""
+    types, others = [], []
     for el in elements:
         if isinstance(el, A.TypeBlock):
-            out += el.decls
+            types += el.decls
         elif not isinstance(el, A.Pragma):
-            out.append(el)
-    return out
+            others.append(el)
+    return types + others
 
 
 def label(node) -> str:
