@@ -336,6 +336,25 @@ def test_rebuilt_st_gives_matiec_the_same_c(exported, tmp_path):
         assert (tmp_path / "rt" / name).read_bytes() == (tmp_path / "lib" / name).read_bytes(), name
 
 
+PROJECT = REPO / "plc_project"
+
+
+@pytest.mark.skipif(not (PROJECT / "plc.st").is_file(), reason="plc_project/plc.st not present in this checkout")
+def test_the_plc_project_exports_whole_with_its_configuration(tmp_path):
+    """`--entry plc_project`: library, program and configuration in one document (a Beremiz project)."""
+    data, lib = export_plcopen(PROJECT)
+    root = etree.fromstring(data)
+    if SCHEMA.is_file():
+        assert validate(data, SCHEMA) == []
+    assert lib.configurations and root.find("p:instances/p:configurations/p:configuration/p:resource/p:task", N) \
+        is not None
+    rebuilt = declarations(parse(xml_to_st(root), "roundtrip.st"))
+    original = declarations(lib.elements)
+    assert [label(n) for n in rebuilt] == [label(n) for n in original]
+    for mine, theirs in zip(rebuilt, original):
+        assert norm(mine) == norm(theirs), label(theirs)
+
+
 # ------------------------------------------------------------------ what st_lib does not use
 
 COVERAGE_LIB = """

@@ -71,11 +71,10 @@ def write_output(out: str, data: bytes) -> str:
 
 def _summary(lib, name: str, data: bytes) -> str:
     c = lib.counts
-    parts = [f"{c['types']} data types", f"{c['functions']} functions", f"{c['function_blocks']} function blocks"]
-    if c["programs"]:
-        parts.append(f"{c['programs']} programs")
-    if c["configurations"]:
-        parts.append(f"{c['configurations']} configurations")
+    words = [("types", "data type"), ("functions", "function"), ("function_blocks", "function block"),
+             ("programs", "program"), ("configurations", "configuration")]
+    parts = [f"{c[key]} {word}{'' if c[key] == 1 else 's'}" for key, word in words
+             if c[key] or key in ("types", "functions", "function_blocks")]
     lines = data.count(b"\n")
     return (f"wrote {name}: {', '.join(parts)} from {len(lib.files)} source files; "
             f"{len(data):,} bytes, {lines:,} lines")
