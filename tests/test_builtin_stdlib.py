@@ -50,6 +50,9 @@ def program(statements: list[str]) -> str:
 def test_every_matiec_standard_function_type_checks():
     sigs = matiec_signatures()
     assert len(sigs) > 1500
+    # declared by MatIEC's library but absent from its C headers: refused by the builtin compiler too
+    assert stdfuncs.MISSING_IN_MATIEC_C <= {name for name, _, _ in sigs}
+    sigs = [s for s in sigs if s[0] not in stdfuncs.MISSING_IN_MATIEC_C]
     missing = sorted({name for name, _, _ in sigs if stdfuncs.lookup(name) is None})
     assert not missing, f"standard functions MatIEC has and the builtin compiler lacks: {missing}"
     rejected = []
@@ -65,7 +68,8 @@ def test_every_matiec_standard_function_type_checks():
 def test_every_matiec_standard_function_compiles(tmp_path: Path):
     """All overloads in one program, through gcc: the code generator has C for each of them."""
     from linmot_st.toolchain.testing import build_text
-    statements = [call_statement(n, r, p) for n, r, p in matiec_signatures()]
+    statements = [call_statement(n, r, p) for n, r, p in matiec_signatures()
+                  if n not in stdfuncs.MISSING_IN_MATIEC_C]
     src = program(statements) + ("CONFIGURATION c\n  RESOURCE r ON PLC\n    TASK t(INTERVAL := T#10ms, PRIORITY := 0);\n"
                                  "    PROGRAM i WITH t : p_std;\n  END_RESOURCE\nEND_CONFIGURATION\n")
     res = build_text(src, tmp_path, "builtin")

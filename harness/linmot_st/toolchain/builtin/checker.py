@@ -105,7 +105,7 @@ class Checker:
             return k
         if k in KEYWORDS or k in T.ELEMENTARY or k in T.ELEMENTARY_ALIASES or k in T.UNSUPPORTED_ELEMENTARY:
             self.error(pos, f"'{name}' is a reserved word and cannot name a {what}")
-        if SF.is_std_function(k):
+        if SF.is_std_function(k) or k in SF.MISSING_IN_MATIEC_C:
             self.error(pos, f"'{name}' is the name of a standard function and cannot name a {what}")
         return k
 
@@ -1221,6 +1221,8 @@ class Checker:
                 self.error(e.pos, f"'{e.name}' is a {pou.kind}, not a FUNCTION")
             if self.cur is not None and pou is self.cur:
                 self.error(e.pos, f"recursive call of {pou.name} (recursion is outside the supported subset)")
+            if not e.args:
+                self.error(e.pos, f"a call of FUNCTION {pou.name} needs at least one argument (MatIEC)")
             bound = self.bind_args(e, pou.params, pou, allow_en=False)
             e.target = (pou, None, bound)
             self.note_callee(pou)
@@ -1232,6 +1234,9 @@ class Checker:
             return self.std_call(e, lk)
         if k in stdfb.names() or k in stdfb.NON_STANDARD:
             self.error(e.pos, f"'{e.name}' is a function block, not a function")
+        if k in SF.MISSING_IN_MATIEC_C:
+            self.error(e.pos, f"{e.name} is outside the supported subset (MatIEC declares it but its C library lacks "
+                              f"it); call the overloaded {k.split('_')[0]}")
         if k in UNSUPPORTED_FUNCTIONS:
             self.error(e.pos, f"{UNSUPPORTED_FUNCTIONS[k]} is outside the supported subset (MatIEC)")
         self.error(e.pos, f"unknown function '{e.name}' (functions must be declared before they are used)")

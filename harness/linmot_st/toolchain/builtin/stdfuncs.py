@@ -161,6 +161,14 @@ TIME_ARITH = {
 }
 
 
+def _missing_in_matiec_c() -> set[str]:
+    """Names MatIEC's standard_functions.txt declares but its C headers never define (its C then does not
+    compile): the explicitly typed MUX_<K>_<T>, and the BOOL variants of the comparisons, LIMIT and MIN."""
+    names = {f"MUX_{k.name}_{t.name}" for k in T.INTS for t in _ELEM_FOR_SEL}
+    names |= {f"{f}_BOOL" for f in ("EQ", "GE", "GT", "LE", "LT", "LIMIT", "MIN")}
+    return names
+
+
 @dataclass
 class Lookup:
     family: Family
@@ -171,7 +179,9 @@ class Lookup:
 
 
 def lookup(name: str) -> Lookup | None:
-    """The standard function called `name` (upper case), or None."""
+    """The standard function called `name` (upper case), or None (also for MISSING_IN_MATIEC_C)."""
+    if name in MISSING_IN_MATIEC_C:
+        return None
     if name in FAMILIES:
         return Lookup(FAMILIES[name])
     if name in CONVERSIONS:
@@ -215,3 +225,6 @@ class StdCall:
     eno: Any = None             # ENO => variable, or None
     tvar_args: list = field(default_factory=list)   # the arguments that share the type variable
     pred: Any = None            # (predicate on the type variable, description)
+
+
+MISSING_IN_MATIEC_C = _missing_in_matiec_c()
