@@ -176,18 +176,27 @@ def test_nested_includes_expand_in_order_and_commented_ones_stay(tmp_path):
             (* entry; this one is a comment: {#include "st_lib/nope.st"} *)
             {#include "st_lib/a.st"}
             FUNCTION F_Last : INT
-              F_Last := F_A() + F_B();
+              VAR_INPUT
+                X : INT;
+              END_VAR
+              F_Last := F_A(X) + F_B(X);
             END_FUNCTION
             """,
         "st_lib/a.st": """
             {#include "st_lib/b.st"}
             FUNCTION F_A : INT
-              F_A := 1;
+              VAR_INPUT
+                X : INT;
+              END_VAR
+              F_A := X;
             END_FUNCTION
             """,
         "st_lib/b.st": """
             FUNCTION F_B : INT
-              F_B := 2; (* comment kept *)
+              VAR_INPUT
+                X : INT;
+              END_VAR
+              F_B := X + 2; (* comment kept *)
             END_FUNCTION
             """,
     })
