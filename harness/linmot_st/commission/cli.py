@@ -1,0 +1,155 @@
+"""`linmot-st commission FILE.pvl`: the PLC commissions emulated drives from a PVL file, then a report.
+
+Steps: read the PVL file, generate its dataset (`pvl to-st`), build plc_project with it, switch on the
+emulated drives (simulated bus by default; NodeServer threads on python-can buses), step the PLC until
+every axis is done or failed (progress on stderr), verify each emulated drive's memory against the PVL
+file, print the report (stdout) and write the report folder. Exit status: 0 when every axis was
+commissioned and the verification passed, 1 otherwise, 2 for bad arguments.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+
+def _node_ids(text: str) -> list[int]:
+    try:
+        return [int(x, 0) for x in text.replace(" ", "").split(",") if x]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"node IDs {text!r}: a comma-separated list such as 1,2,5") from None
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "commission", help="commission emulated E1100 drives from a PVL file with the PLC, and report",
+        description=__doc__.splitlines()[0], formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog="docs/commissioning.md describes the phases, the report and every figure.")
+    p.add_argument("file", metavar="FILE.pvl", help="the PVL file (LinMot-Talk export)")
+    p.add_argument("--axes", type=int, default=None, metavar="N", help="number of drives, 1..8 (default 1)")
+    p.add_argument("--node-ids", type=_node_ids, default=None, metavar="IDS",
+                   help="their CANopen node IDs, comma-separated (default 1..N)")
+    p.add_argument("--bus", default="sim", metavar="BUS",
+                   help="sim (default: simulated bus, virtual time), virtual[:CHANNEL] (python-can, real time), "
+                        "socketcan:CHANNEL, or INTERFACE:CHANNEL")
+    p.add_argument("--bitrate", type=int, default=500_000, metavar="B", help="bit/s (default 500000)")
+    p.add_argument("--backend", choices=("auto", "matiec", "builtin"), default="auto",
+                   help="ST compiler (default auto: MatIEC where installed)")
+    p.add_argument("--trace", metavar="FILE", help="also write the CAN trace here (.log, .asc or .blf)")
+    p.add_argument("--trace-format", choices=("log", "asc", "blf"), default="log",
+                   help="format of the trace in the report folder (default log: candump)")
+    p.add_argument("--report", metavar="DIR", help="write the report folder (report.md, report.json, trace, plots)")
+    p.add_argument("--live-ram", action=argparse.BooleanOptionalAction, default=False,
+                   help="write RAM+ROM, ROM only where the drive refuses RAM (non-live parameters) (default off)")
+    p.add_argument("--flash", action=argparse.BooleanOptionalAction, default=True,
+                   help="save curves and command table to flash (default on)")
+    p.add_argument("--reset", action=argparse.BooleanOptionalAction, default=True,
+                   help="reset the drives at the end, so that RAM = ROM and the verify reads what survives "
+                        "a restart (default on)")
+    p.add_argument("--verify", action=argparse.BooleanOptionalAction, default=True,
+                   help="the PLC reads everything back (default on)")
+    p.add_argument("--drive-timings", choices=("real", "fast"), default=None,
+                   help="emulated drive durations (boot 4 s, MC start 3 s, ...) or short ones "
+                        "(default: real on the simulated bus, fast on real-time buses)")
+    p.add_argument("--timeout", type=float, default=None, metavar="S",
+                   help="give up after S seconds of PLC time (default: from the dataset size)")
+    p.add_argument("--no-emulate", dest="emulate", action="store_false",
+                   help="real drives on a real bus: no emulated drives, no memory verification")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
+    p.set_defaults(func=run_command)
+
+
+def run_command(args: argparse.Namespace) -> int:
+    import time
+    from pathlib import Path
+
+    from linmot_st.pvl import PvlError, load_pvl
+    from linmot_st.toolchain import CompileError
+
+    from .dataset import DatasetError, from_pvl
+    from .progress import Progress
+    from .project import build_project, prepare
+    from .report import Context, Report
+    from .runner import RunOptions, run
+    from .verify import verify
+
+    err = sys.stderr
+    try:
+        pvl = load_pvl(args.file)
+    except PvlError as e:
+        print(e, file=err)
+        print(f"{args.file}: {len(e.diagnostics)} error(s)", file=err)
+        return 1
+    except OSError as e:
+        print(f"{args.file}: {e.strerror or e}", file=err)
+        return 1
+    axes = args.axes if args.axes is not None else (len(args.node_ids) if args.node_ids else 1)
+    if args.node_ids and len(args.node_ids) != axes:
+        print(f"error: --axes {axes} but {len(args.node_ids)} node IDs", file=err)
+        return 2
+    opts = RunOptions(axes=axes, node_ids=args.node_ids, bus=args.bus, bitrate=args.bitrate,
+                      live_ram=args.live_ram, flash=args.flash, reset=args.reset, verify=args.verify,
+                      timings=args.drive_timings, timeout_s=args.timeout, emulate=args.emulate)
+    try:
+        opts.nodes()
+        if not opts.emulate and opts.simulated:
+            raise ValueError("--no-emulate needs a real bus (--bus socketcan:CHANNEL)")
+        if opts.bitrate <= 0 or 1_000_000_000 % opts.bitrate:
+            raise ValueError(f"--bitrate {opts.bitrate}: must divide 1e9 (125000, 250000, 500000, 1000000)")
+    except ValueError as e:
+        print(f"error: {e}", file=err)
+        return 2
+    try:
+        dataset = from_pvl(pvl)
+        project = prepare(pvl, Path(args.file).name)
+    except (DatasetError, FileNotFoundError) as e:
+        print(f"error: {e}", file=err)
+        return 1
+    t0 = time.perf_counter()
+    try:
+        res = build_project(project, args.backend)
+    except CompileError as e:
+        print(e, file=err)
+        return 1
+    build_s = time.perf_counter() - t0
+    rel = _rel(project.entry)
+    if not args.quiet:
+        print(f"built {rel} with {res.backend} ({'cached' if res.cached else f'{build_s:.1f} s'}); "
+              f"commissioning {axes} drive(s) on {'the simulated bus' if opts.simulated else opts.bus}", file=err)
+    progress = None if args.quiet else Progress(err)
+    try:
+        result = run(pvl, opts, res, dataset=dataset, progress=progress)
+    except (ValueError, OSError) as e:
+        print(f"error: {e}", file=err)
+        return 2
+    finally:
+        if progress:
+            progress.close()
+    verification = verify(pvl, result.drives if opts.emulate else {}, opts)
+    ctx = Context(pvl_path=args.file, command=" ".join(["linmot-st", "commission", *sys.argv[2:]]) if
+                  sys.argv[1:2] == ["commission"] else f"linmot-st commission {args.file}",
+                  backend=res.backend, build_s=build_s, build_cached=res.cached, project=rel,
+                  dataset_words=dataset.words)
+    report = Report(ctx, result, dataset, verification, pvl)
+    report.compute()
+    if args.report:
+        report.write(Path(args.report), args.trace_format)
+    if args.trace:
+        from linmot_st.bus.trace import write_trace
+        try:
+            write_trace(result.trace, args.trace)
+        except ValueError as e:
+            print(f"error: {e}", file=err)
+    sys.stdout.write(report.text())
+    if args.report:
+        print(f"report: {args.report}/report.md, report.json, can.{args.trace_format}, "
+              f"{len(report.figures['files']['plots'])} curve plot(s)")
+    return 0 if report.figures["result"]["passed"] else 1
+
+
+def _rel(path) -> str:
+    from pathlib import Path
+    try:
+        return str(Path(path).resolve().relative_to(Path.cwd().resolve()))
+    except ValueError:
+        return str(path)

@@ -1,0 +1,383 @@
+"""Running a commissioning: emulated drives on a bus, the PLC stepped until every axis is done or failed.
+
+    from linmot_st.commission.runner import RunOptions, run
+    result = run(pvl, RunOptions(axes=2), build_result=res)
+
+On the simulated bus (`bus="sim"`) everything runs in virtual time with CoSim; on a python-can bus
+(`virtual[:CH]`, `socketcan:CH`, `INTERFACE:CH`) the drives are served by NodeServer threads and the PLC
+runs in real time with RealTimeCoSim. After every scan a sampler reads each axis' phase and exchange
+counter (that is how the report knows each phase's scans, time and exchanges) and tells the progress
+display. Tests pass `drive_factory` (drives with other trees or limits) and `prepare_bus` (fault
+injection on the SimBus).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+from .project import INSTANCE, MAILBOX, MAX_AXES
+
+PHASES = ("idle", "start", "check", "params", "curves", "ct", "flash", "reset", "verify", "done")
+
+
+def phase_name(enum_value: str) -> str:
+    """LM_COM_PARAMS -> params."""
+    return enum_value.removeprefix("LM_COM_").lower()
+
+
+@dataclass
+class RunOptions:
+    axes: int = 1
+    node_ids: list[int] | None = None          # default 1..axes
+    bus: str = "sim"                           # sim | virtual[:CH] | socketcan:CH | INTERFACE:CH
+    bitrate: int = 500_000
+    live_ram: bool = False
+    flash: bool = True
+    reset: bool = True
+    verify: bool = True
+    timings: str | None = None                 # "real" | "fast"; default real on sim, fast on real-time buses
+    latency_ns: int = 0                        # extra latency of the drives' frames on the simulated bus
+    timeout_s: float | None = None             # virtual (sim) or wall seconds; default from the dataset
+    emulate: bool = True                       # False: real drives on the bus (python-can buses only)
+
+    def nodes(self) -> list[int]:
+        ids = list(self.node_ids) if self.node_ids else list(range(1, self.axes + 1))
+        if not 1 <= len(ids) <= MAX_AXES:
+            raise ValueError(f"{len(ids)} axes: plc_project commissions 1..{MAX_AXES}")
+        if len(set(ids)) != len(ids) or not all(1 <= n <= 127 for n in ids):
+            raise ValueError(f"node IDs {ids}: each 1..127, no duplicates")
+        return ids
+
+    @property
+    def simulated(self) -> bool:
+        return self.bus == "sim"
+
+    def timing_kind(self) -> str:
+        return self.timings or ("real" if self.simulated else "fast")
+
+
+@dataclass
+class PhaseRecord:
+    phase: str
+    t0_ns: int                  # time of its first scan
+    scan0: int
+    exch0: int
+    t1_ns: int = 0              # time of the first scan after it
+    scan1: int = 0
+    exchanges: int = 0
+    items_total: int = 0
+
+    @property
+    def scans(self) -> int:
+        return self.scan1 - self.scan0
+
+    @property
+    def duration_ns(self) -> int:
+        return self.t1_ns - self.t0_ns
+
+
+@dataclass
+class AxisResult:
+    axis: int
+    node_id: int
+    done: bool = False
+    error: bool = False
+    error_id: int = 0
+    abort_code: int = 0
+    fail_phase: str = ""
+    fail_item: int = 0
+    fail_step: int = 0
+    fail_expected: int = 0
+    fail_actual: int = 0
+    drive_layer: tuple[int, int, int] = (0, 0, 0)
+    exchanges: int = 0
+    live_written: int = 0
+    up_ns: int | None = None                   # when the PLC first heard the drive
+    phases: list[PhaseRecord] = field(default_factory=list)
+
+    @property
+    def started_ns(self) -> int | None:
+        return self.phases[0].t0_ns if self.phases else None
+
+    @property
+    def ended_ns(self) -> int | None:
+        return self.phases[-1].t1_ns if self.phases and (self.done or self.error) else None
+
+    @property
+    def finished(self) -> bool:
+        return self.done or self.error
+
+
+@dataclass
+class TraceRecord:
+    """A frame seen on a python-can bus (the in-memory trace of a real-time run), shaped like SimBus's
+    TraceEntry so that one statistics function serves both."""
+    start_ns: int
+    end_ns: int
+    sender: str
+    frame: Any
+    status: str = "ok"
+
+
+@dataclass
+class RunResult:
+    options: RunOptions
+    node_ids: list[int]
+    tick_ns: int
+    bit_ns: int
+    axes: list[AxisResult]
+    trace: list                                # SimBus TraceEntry or TraceRecord
+    drives: dict                               # node ID -> E1100Drive (emulated) 
+    scans: int = 0
+    wall_s: float = 0.0
+    timed_out: bool = False
+    overruns: int = 0
+    max_lateness_ns: int = 0
+    stats: Any = None                          # BusStats over the commissioning span
+
+    @property
+    def t_start_ns(self) -> int:
+        starts = [a.started_ns for a in self.axes if a.started_ns is not None]
+        return min(starts) if starts else 0
+
+    @property
+    def t_end_ns(self) -> int:
+        ends = [a.phases[-1].t1_ns for a in self.axes if a.phases]
+        return max(ends) if ends else self.t_start_ns
+
+    @property
+    def commissioned(self) -> bool:
+        return all(a.done for a in self.axes) and not self.timed_out
+
+
+class Sampler:
+    """Reads each axis' outputs after every scan; records phase boundaries; tells the progress display."""
+
+    def __init__(self, plc, node_ids: list[int], progress=None) -> None:
+        self.plc = plc
+        self.progress = progress
+        self.axes = [AxisResult(k + 1, n) for k, n in enumerate(node_ids)]
+        v = plc.var
+        self._vars = [dict(phase=v(f"{INSTANCE}.A{k}.COM.PHASE"), exch=v(f"{INSTANCE}.A{k}.COM.EXCHANGES"),
+                           done=v(f"{INSTANCE}.A{k}.COM.DONE"), error=v(f"{INSTANCE}.A{k}.COM.ERROR"),
+                           up=v(f"{INSTANCE}.A{k}.UP"), items=v(f"{INSTANCE}.A{k}.COM.ITEMSDONE"),
+                           total=v(f"{INSTANCE}.A{k}.COM.ITEMSTOTAL"))
+                      for k in range(1, len(node_ids) + 1)]
+        self._last_exch = [0] * len(node_ids)
+        self._started = [False] * len(node_ids)
+        self.scans = 0
+
+    def __call__(self) -> bool:
+        """Called before each scan (and after the last): True when every axis has finished."""
+        plc = self.plc
+        if self.scans:
+            t_scan = plc.time_ns - plc.tick_ns      # the scan that just ran
+            scan = self.scans - 1
+            for k, (ax, vs) in enumerate(zip(self.axes, self._vars)):
+                if ax.finished:
+                    continue
+                if ax.up_ns is None and vs["up"].value:
+                    ax.up_ns = t_scan
+                phase = phase_name(vs["phase"].value)
+                exch = vs["exch"].value
+                cur = ax.phases[-1] if ax.phases else None
+                if not self._started[k]:
+                    if phase != "start" and not vs["error"].value:
+                        self._last_exch[k] = exch
+                        continue
+                    self._started[k] = True
+                if cur is None or (phase != cur.phase and phase not in ("done",)):
+                    if cur is not None:
+                        cur.t1_ns, cur.scan1 = t_scan, scan
+                        cur.exchanges = self._last_exch[k] - cur.exch0
+                    ax.phases.append(PhaseRecord(phase, t_scan, scan, self._last_exch[k]))
+                    cur = ax.phases[-1]
+                    if self.progress and len(ax.phases) > 1:
+                        self.progress.phase_done(ax, ax.phases[-2], t_scan)
+                cur.items_total = vs["total"].value
+                if vs["done"].value or vs["error"].value:
+                    # the scan that finished belongs to the phase it finished
+                    cur.t1_ns, cur.scan1 = t_scan + plc.tick_ns, scan + 1
+                    cur.exchanges = exch - cur.exch0
+                    ax.done, ax.error = bool(vs["done"].value), bool(vs["error"].value)
+                    if self.progress:
+                        self.progress.axis_finished(ax, cur, t_scan)
+                self._last_exch[k] = exch
+            if self.progress:
+                self.progress.tick(self, plc.time_ns)
+        self.scans += 1
+        return all(a.finished for a in self.axes)
+
+    def live(self, k: int) -> tuple[str, int, int]:
+        """(phase, items done, items total) of axis k (0-based) now."""
+        vs = self._vars[k]
+        return phase_name(vs["phase"].value), vs["items"].value, vs["total"].value
+
+
+def _configure(plc, opts: RunOptions, nodes: list[int]) -> None:
+    p = INSTANCE
+    plc[f"{p}.AXES"] = len(nodes)
+    plc[f"{p}.NODEIDS"] = nodes + [0] * (MAX_AXES - len(nodes))
+    plc[f"{p}.WAITBOOT"] = opts.emulate            # emulated drives are switched on with the PLC
+    plc[f"{p}.LIVERAM"] = opts.live_ram
+    plc[f"{p}.FLASH"] = opts.flash
+    plc[f"{p}.RESET"] = opts.reset
+    plc[f"{p}.VERIFY"] = opts.verify
+    plc[f"{p}.START"] = True
+
+
+def _collect(plc, sampler: Sampler) -> None:
+    for ax in sampler.axes:
+        c = plc[f"{INSTANCE}.A{ax.axis}.COM"]
+        ax.error_id, ax.abort_code = c["ERRORID"], c["ABORTCODE"]
+        ax.fail_phase = phase_name(c["FAILPHASE"]) if ax.error else ""
+        ax.fail_item, ax.fail_step = c["FAILITEM"], c["FAILSTEP"]
+        ax.fail_expected, ax.fail_actual = c["FAILEXPECTED"], c["FAILACTUAL"]
+        dl = c["DRIVELAYER"]
+        ax.drive_layer = (dl["TREEID"], dl["MAINVERSION"], dl["SUBVERSION"])
+        ax.exchanges, ax.live_written = c["EXCHANGES"], c["LIVEWRITTEN"]
+
+
+def default_timeout_s(dataset, opts: RunOptions) -> float:
+    """Generous: 4 ms per expected exchange, plus the drives' slow services (boot, MC start, flash, reset)."""
+    from .dataset import expected_exchanges
+    n = expected_exchanges(dataset, verify=opts.verify, flash=opts.flash)
+    return 4e-3 * n + 60.0
+
+
+def make_drive(node_id: int, opts: RunOptions):
+    from linmot_st.emulator import DriveTimings, E1100Drive
+    timings = DriveTimings.fast() if opts.timing_kind() == "fast" else DriveTimings()
+    return E1100Drive(node_id, timings=timings)
+
+
+def run(pvl, opts: RunOptions, build_result, *, dataset=None, progress=None,
+        drive_factory: Callable[[int], Any] | None = None,
+        prepare_bus: Callable[[Any, dict], None] | None = None,
+        prepare_plc: Callable[[Any], None] | None = None) -> RunResult:
+    """Commission with the PLC of `build_result` (plc_project with this PVL's dataset). `prepare_plc(plc)`
+    runs after the program's settings are written and before the first scan (tests: patch the dataset)."""
+    from linmot_st.plc import Plc
+
+    from .dataset import from_pvl
+
+    nodes = opts.nodes()
+    dataset = dataset or from_pvl(pvl)
+    timeout_s = opts.timeout_s or default_timeout_s(dataset, opts)
+    plc = Plc(build_result)
+    factory = drive_factory or (lambda n: make_drive(n, opts))
+    if opts.simulated:
+        return _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, timeout_s)
+    return _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s)
+
+
+def _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, timeout_s) -> RunResult:
+    from linmot_st.bus import SimBus
+    from linmot_st.cosim import CoSim, CoSimTimeout
+
+    bus = SimBus(opts.bitrate)
+    drives = {}
+    for n in nodes:
+        d = factory(n)
+        bus.attach(d, f"drive{n}", latency_ns=opts.latency_ns)
+        d.power_on(0)
+        drives[n] = d
+    if prepare_bus:
+        prepare_bus(bus, drives)
+    sim = CoSim(plc, bus, mailbox=MAILBOX, name="plc")
+    _configure(plc, opts, nodes)
+    if prepare_plc:
+        prepare_plc(plc)
+    sampler = Sampler(plc, nodes, progress)
+    wall0 = time.perf_counter()
+    timed_out = False
+    try:
+        sim.run_until(sampler, max_scans=int(timeout_s * 1e9 // plc.tick_ns))
+    except CoSimTimeout:
+        timed_out = True
+    wall = time.perf_counter() - wall0
+    _collect(plc, sampler)
+    res = RunResult(opts, nodes, plc.tick_ns, bus.bit_ns, sampler.axes, list(bus.trace), drives,
+                    scans=sim.scans, wall_s=wall, timed_out=timed_out)
+    res.stats = bus.stats(res.t_start_ns, max(res.t_end_ns, res.t_start_ns))
+    return res
+
+
+class _RecordingBus:
+    """A python-can Bus wrapper that keeps every frame the PLC sends or receives (the run's trace)."""
+
+    def __init__(self, bus, t0: int, bit_ns: int) -> None:
+        self.bus, self.t0, self.bit_ns = bus, t0, bit_ns
+        self.records: list[TraceRecord] = []
+
+    def _record(self, msg, sender: str) -> None:
+        from linmot_st.bus import Frame, frame_length_bits
+        frame = Frame.from_message(msg)
+        end = time.monotonic_ns() - self.t0
+        self.records.append(TraceRecord(end - frame_length_bits(frame) * self.bit_ns, end, sender, frame))
+
+    def send(self, msg, timeout=None):
+        self.bus.send(msg, timeout=timeout)
+        self._record(msg, "plc")
+
+    def recv(self, timeout=None):
+        msg = self.bus.recv(timeout=timeout)
+        if msg is not None and not (msg.is_error_frame or msg.is_extended_id or getattr(msg, "is_fd", False)):
+            self._record(msg, f"node{msg.arbitration_id & 0x7F}")
+        return msg
+
+
+def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s) -> RunResult:
+    import os
+
+    from linmot_st.bus import open_bus
+    from linmot_st.bus.stats import bus_stats
+    from linmot_st.cosim import CoSimTimeout, RealTimeCoSim
+
+    spec = opts.bus
+    if spec == "virtual":
+        spec = f"virtual:linmot-st-commission-{os.getpid()}"
+    if not opts.emulate and spec.startswith("virtual"):
+        raise ValueError("--no-emulate needs a real bus (socketcan:CHANNEL): nothing else is on a virtual bus")
+    drive_buses, drives = [], {}
+    plc_bus = None
+    bit_ns = 1_000_000_000 // opts.bitrate
+    try:
+        if opts.emulate:
+            for n in nodes:
+                b = open_bus(spec, bitrate=opts.bitrate)
+                drive_buses.append(b)
+                d = factory(n)
+                drives[n] = d
+        plc_bus = _RecordingBus(open_bus(spec, bitrate=opts.bitrate), time.monotonic_ns(), bit_ns)
+        for b, d in zip(drive_buses, drives.values()):
+            d.attach(b)                                  # switched on now: boots after its boot time
+        sim = RealTimeCoSim(plc, plc_bus, mailbox=MAILBOX)
+        _configure(plc, opts, nodes)
+        if prepare_plc:
+            prepare_plc(plc)
+        sampler = Sampler(plc, nodes, progress)
+        plc_bus.t0 = time.monotonic_ns()                 # trace times = PLC times
+        wall0 = time.perf_counter()
+        timed_out = False
+        try:
+            sim.run_until(sampler, timeout_s=timeout_s)
+        except CoSimTimeout:
+            timed_out = True
+        wall = time.perf_counter() - wall0
+    finally:
+        for d in drives.values():
+            d.detach()
+        for b in drive_buses:
+            b.shutdown()
+        if plc_bus is not None:
+            plc_bus.bus.shutdown()
+    _collect(plc, sampler)
+    # PLC time and wall time run together in a real-time run (scan k at wall start + k ticks)
+    trace = sorted(plc_bus.records, key=lambda r: r.end_ns)
+    res = RunResult(opts, nodes, plc.tick_ns, bit_ns, sampler.axes, trace, drives, scans=sim.scans,
+                    wall_s=wall, timed_out=timed_out, overruns=sim.overruns, max_lateness_ns=sim.max_lateness_ns)
+    res.stats = bus_stats(trace, bit_ns, res.t_start_ns, max(res.t_end_ns, res.t_start_ns))
+    return res
