@@ -281,6 +281,9 @@ class Checker:
         if isinstance(init, A.ArrayInit):
             if not isinstance(ty, T.Array):
                 self.error(init.pos, f"an array initialiser for a variable of type {T.describe(ty)}")
+            if isinstance(ty.elem.base(), T.Enum):
+                self.error(init.pos, "initial values for an array of enumerated values are outside the supported "
+                                     "subset (iec2c stops with an internal error)")
             total = 0
             for count, value in init.items:
                 if count < 1:
