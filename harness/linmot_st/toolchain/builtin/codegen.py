@@ -875,7 +875,9 @@ class CodeGen:
             fake.ty = e.ty
             fake.time = True
             return self.time_binop(fake)
-        cs = [self.expr(a) for a in args]
+        # a REAL argument is rounded to REAL, as when MatIEC passes it to its C function
+        cs = [f"((REAL)({self.expr(a)}))" if a.ty is not None and a.ty.base() is T.REAL else self.expr(a)
+              for a in args]
         if n in ("ADD", "MUL", "SUB"):
             op = {"ADD": "+", "MUL": "*", "SUB": "-"}[n]
             acc = cs[0]
@@ -1002,6 +1004,8 @@ class CodeGen:
             dst = e.ty.base()
         dst = dst.base()
         a = self.expr(arg)
+        if src is T.REAL:
+            a = f"((REAL)({a}))"
         if sc.kind == "bcd_decode":
             return f"(({dst.cname})__bcd_to_uint((unsigned long long)({a})))"
         if sc.kind == "bcd_encode":
