@@ -1,0 +1,142 @@
+"""Commissioning end to end: the PLC (plc_project with the dataset of examples/two_axes.pvl) commissions
+emulated E1100 drives on the simulated bus; checked from the drives' memory, the bus trace and the report.
+
+One build per backend serves every test (linmot_st.commission.testing)."""
+
+from __future__ import annotations
+
+import json
+import os
+
+import pytest
+
+from linmot_st.cli import main
+from linmot_st.commission.dataset import INFO_WORDS
+from linmot_st.commission.testing import EXAMPLE, commission, example
+from linmot_st.toolchain.testing import BACKEND_PARAMS
+
+PVL = example()
+CURVE_EXCHANGES = 1 + sum(1 + INFO_WORDS + len(c.setpoints) for c in PVL.curves)   # 41h, then 50h, 54h x 18, 53h x N
+EXPECTED = {"check": 3 * 2, "params": 30, "curves": CURVE_EXCHANGES, "ct": 1 + 33 * 3,
+            "verify": 30 + (CURVE_EXCHANGES - 1) + 33 * 3}
+
+
+def requests(result, node: int) -> list:
+    return [e for e in result.trace if e.frame.can_id == 0x600 + node and e.status != "error"]
+
+
+@pytest.mark.parametrize("backend", BACKEND_PARAMS)
+def test_one_axis(backend):
+    o = commission(backend, axes=1)
+    ax = o.axis(1)
+    assert ax.done and not ax.error and ax.error_id == 0
+    assert o.verification.ok, o.report.text()
+    phases = {p.phase: p for p in ax.phases}
+    assert list(phases) == ["start", "check", "params", "curves", "ct", "flash", "verify"]
+    for name, n in EXPECTED.items():
+        assert phases[name].exchanges == n, name
+    # each exchange takes one scan: the answer is checked and the next request sent in the same scan,
+    # across items and phases; the header costs 2 scans; the last scan of the run sees the last answer
+    for name in ("check", "params", "curves", "ct"):
+        assert phases[name].scans == phases[name].exchanges, name
+    assert phases["verify"].scans == phases["verify"].exchanges + 1
+    assert (phases["start"].scans, phases["start"].exchanges) == (2, 0)
+    # the bus carried exactly the FB's requests, each answered
+    assert len(requests(o.result, 1)) == ax.exchanges
+    assert sum(1 for e in o.result.trace if e.frame.can_id == 0x581) == ax.exchanges
+    drive = o.result.drives[1]
+    assert sorted(drive.curves.flash) == sorted(drive.curves.ram) == [1, 2, 23]
+    assert sorted(drive.ct.flash) == [1, 2, 3]
+    assert drive.string(0x03E8) == "LinMot-ST Demo" and drive.rom(0x1601) == -100000
+    text = o.report.text()
+    assert "result: PASSED" in text and "curves                         532     532" in text
+
+
+def test_both_backends_put_the_same_frames_on_the_bus():
+    from linmot_st.toolchain import builtin_available, matiec_available
+    if not (matiec_available() and builtin_available()):
+        pytest.skip("needs both MatIEC and the builtin compiler")
+    traces = []
+    for backend in ("matiec", "builtin"):
+        o = commission(backend, axes=1, verify=False, flash=False)
+        traces.append([(e.start_ns, e.frame.can_id, e.frame.data) for e in o.result.trace])
+    assert traces[0] == traces[1]
+
+
+def test_two_axes_in_parallel():
+    one = commission(axes=1)
+    two = commission(axes=2)
+    assert all(a.done for a in two.result.axes) and two.verification.ok, two.report.text()
+    for node in (1, 2):
+        assert len(requests(two.result, node)) == two.axis(node).exchanges == one.axis(1).exchanges
+        assert {c.what: c.equal for c in two.verification.for_node(node) if c.required} == {
+            "parameters ROM": 30, "curves RAM": 3, "curves flash": 3, "command table RAM": 3,
+            "command table flash": 3}
+    # the two axes progress together: the run takes about as long as one axis alone, not twice as long
+    t1 = one.result.t_end_ns - one.result.t_start_ns
+    t2 = two.result.t_end_ns - two.result.t_start_ns
+    assert t2 <= t1 + 10_000_000, (t1, t2)
+    assert two.report.figures["bus"]["load"] > 1.8 * one.report.figures["bus"]["load"]
+
+
+def test_other_node_ids_and_live_ram():
+    o = commission(axes=2, node_ids=[5, 17], live_ram=True, verify=False)
+    assert [a.node_id for a in o.result.axes] == [5, 17] and all(a.done for a in o.result.axes)
+    drive = o.result.drives[17]
+    live = [p.upid for obj in PVL.parameter_objects for p in obj.parameters if drive.params[p.upid].live]
+    assert 0 < len(live) < 30
+    ax = o.axis(17)
+    assert ax.live_written == len(live)
+    # RAM+ROM first; a non-live parameter is refused as a whole, then written to ROM only
+    params = next(p for p in ax.phases if p.phase == "params")
+    assert params.exchanges == 30 + (30 - len(live))
+    assert o.verification.ok, o.report.text()                      # RAM of the live parameters checked
+    for upid in live:
+        assert drive.ram(upid) == drive.rom(upid)
+    assert {e.frame.can_id for e in o.result.trace} >= {0x605, 0x611, 0x585, 0x591}
+
+
+def test_reset_then_verify_reads_what_survives_the_restart():
+    o = commission(axes=1, reset=True)
+    ax = o.axis(1)
+    assert ax.done and o.verification.ok, o.report.text()
+    assert [p.phase for p in ax.phases] == ["start", "check", "params", "curves", "ct", "flash", "reset", "verify"]
+    drive = o.result.drives[1]
+    assert drive.nmt_state == "OPERATIONAL"
+    ram = next(c for c in o.verification.for_node(1) if c.what == "parameters RAM")
+    assert ram.required and ram.equal == 30                         # after the reset RAM = ROM everywhere
+    assert sum(1 for e in o.result.trace if e.frame.can_id == 0x701 and e.frame.data == b"\x00") == 2
+
+
+def test_the_demo_command(tmp_path, capsys):
+    """`make demo`: two axes with the default options (realistic drive timings, flash, reset, verify)."""
+    report = tmp_path / "report"
+    trace = tmp_path / "run.blf"
+    assert main(["commission", str(EXAMPLE), "--axes", "2", "--report", str(report), "--trace", str(trace)]) == 0
+    out = capsys.readouterr()
+    assert "result: PASSED (2 axes commissioned and verified)" in out.out
+    assert "node 1   parameters          done: 30 parameters, 30 exchanges, 30 scans" in out.err
+    names = sorted(p.name for p in report.iterdir())
+    assert names == sorted(["report.md", "report.json", "can.log"] +
+                           [f"curve_{c}_node{n}.png" for c in (1, 2, 23) for n in (1, 2)])
+    fig = json.loads((report / "report.json").read_text())
+    assert fig["result"] == {"commissioned": True, "verified": True, "passed": True}
+    assert [p["phase"] for p in fig["axes"][0]["phases"]] == ["start", "check", "params", "curves", "ct", "flash",
+                                                             "reset", "verify"]
+    assert fig["axes"][1]["exchanges"] == fig["axes"][1]["exchanges_on_bus"]
+    assert 1.0 < fig["bus"]["ratio"] and fig["bus"]["lower_bound_ms"] > 0
+    assert (report / "report.md").read_text().startswith("# Commissioning report")
+    assert (report / "curve_1_node2.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    from linmot_st.bus.trace import read_trace
+    logged = read_trace(report / "can.log")
+    assert len(logged) == len(read_trace(trace)) >= fig["bus"]["frames"]
+
+
+def test_virtual_bus_in_real_time():
+    if os.environ.get("CI_NO_REALTIME"):
+        pytest.skip("real-time tests disabled")
+    o = commission(axes=1, bus="virtual", verify=False)
+    ax = o.axis(1)
+    assert ax.done and o.verification.ok, o.report.text()
+    assert len(requests(o.result, 1)) == ax.exchanges                # the recorded trace holds every frame
+    assert o.result.wall_s >= (o.result.t_end_ns - o.result.t_start_ns) / 1e9 * 0.95   # PLC time ran with the wall clock

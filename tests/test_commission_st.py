@@ -1,0 +1,48 @@
+"""The ST side of the commissioning and the Python side agree: the ErrorID table (generated file in sync),
+the dataset format constants (T_LmDsFormat vs linmot_st.commission.dataset), and the library's rules for
+MatIEC (no FOR loop, every file included by st_lib/linmot.st)."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+from linmot_st.commission import codes
+from linmot_st.commission import dataset as dsf
+
+REPO = Path(__file__).resolve().parents[1]
+ST = REPO / "st_lib" / "commission"
+
+
+def test_error_table_and_generated_st_agree():
+    assert codes.check() == []
+    st = (ST / "errors.st").read_text()
+    for e in codes.COMMISSION_ERRORS:
+        assert re.search(rf"\b{e.name}\s*:\s*WORD\s*:=\s*16#{e.value:04X};", st)
+    assert codes.describe(0x0603).startswith("16#0603 read-back differs")
+    assert codes.describe(0x0501).startswith("16#0501 firmware layer")         # the library's own codes too
+    assert codes.name_of(0x0602) == "ResetNeedsFlash"
+
+
+def test_dataset_format_constants_agree():
+    text = (ST / "types.st").read_text()
+    fmt = dict(re.findall(r"^\s*(\w+)\s*:\s*\w+\s*:=\s*(16#[0-9A-Fa-f]+|\d+);", text.split("T_LmDsFormat")[1], re.M))
+    value = {k: int(v.replace("16#", ""), 16) if v.startswith("16#") else int(v) for k, v in fmt.items()}
+    assert value == {
+        "Magic": dsf.MAGIC, "Version": dsf.VERSION, "HeaderWords": dsf.HEADER_WORDS,
+        "TagLayer": dsf.TAG_LAYER, "TagParam": dsf.TAG_PARAM, "TagCurve": dsf.TAG_CURVE, "TagEntry": dsf.TAG_ENTRY,
+        "TagEnd": dsf.TAG_END, "InfoWords": dsf.INFO_WORDS, "EntryWords": dsf.ENTRY_WORDS,
+        "MaxSetpoints": dsf.MAX_SETPOINTS,
+    }
+
+
+def test_matiec_rules():
+    entry = (REPO / "st_lib" / "linmot.st").read_text()
+    for f in sorted(ST.glob("*.st")):
+        assert f'{{#include "st_lib/commission/{f.name}"}}' in entry
+        code = re.sub(r"\(\*.*?\*\)", "", f.read_text(), flags=re.S)
+        assert not re.search(r"\bFOR\b", code), f"{f.name}: FOR loops miscompile in MatIEC HEAD (spec/matiec.md 7)"
+        assert not re.search(r"\bSTEP\b", code, re.I), f"{f.name}: STEP is an SFC keyword"
+    for f in sorted((REPO / "plc_project").glob("*.st")):
+        code = re.sub(r"\(\*.*?\*\)", "", f.read_text(), flags=re.S)
+        assert not re.search(r"\bFOR\b", code)
