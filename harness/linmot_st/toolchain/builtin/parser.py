@@ -510,7 +510,12 @@ def _int_value(tok) -> int:
     text = str(tok).replace("_", "")
     if "#" in text:
         base, digits = text.split("#", 1)
-        return int(digits, int(base))
+        try:
+            return int(digits, int(base))
+        except ValueError:
+            line, col = getattr(tok, "line", 0) or 0, getattr(tok, "column", 0) or 0
+            raise BuiltinCompileError([Diagnostic(_Builder.file, line, col,
+                                                  f"invalid base-{base} literal {str(tok)!r}")]) from None
     return int(text)
 
 
@@ -607,10 +612,18 @@ def parse(text: str, file: str) -> list[A.Node]:
         return parser.parse(text)
     except lark.exceptions.VisitError as exc:       # an error raised inside a callback
         if isinstance(exc.orig_exc, BuiltinCompileError):
-            raise exc.orig_exc from None
+            raise _named(exc.orig_exc, file) from None
         raise
+    except BuiltinCompileError as exc:
+        raise _named(exc, file) from None
     except lark.UnexpectedInput as exc:
         raise BuiltinCompileError([_syntax_diagnostic(exc, text, file)]) from None
+
+
+def _named(exc: BuiltinCompileError, file: str) -> BuiltinCompileError:
+    """Diagnostics raised by literal decoding, which does not know the file name, get it here."""
+    return BuiltinCompileError([Diagnostic(file, d.line, d.col, d.message) if d.file == _Builder.file else d
+                                for d in exc.diagnostics])
 
 
 def _syntax_diagnostic(exc: lark.UnexpectedInput, text: str, file: str) -> Diagnostic:
