@@ -842,7 +842,7 @@ class Checker:
     def lvalue(self, e: A.Node, what: str, in_out: bool = False) -> T.Type:
         """Type of an assignable expression; rejects constants, inputs of FUNCTIONs read-only..."""
         if not isinstance(e, (A.Name, A.Member, A.Index)):
-            if isinstance(e, A.BitAccess):
+            if isinstance(e, (A.BitAccess, A.Deref, A.DirectVar)):
                 self.infer(e)
             self.error(e.pos, f"{what}: a variable is required here")
         ty = self.infer(e)
