@@ -118,7 +118,7 @@ def test_the_demo_command(tmp_path, capsys):
     assert "node 1   parameters          done: 30 parameters, 30 exchanges, 30 scans" in out.err
     names = sorted(p.name for p in report.iterdir())
     assert names == sorted(["report.md", "report.json", "can.log"] +
-                           [f"curve_{c}_node{n}.png" for c in (1, 2, 23) for n in (1, 2)])
+                           [f"curve_{c}.png" for c in (1, 2, 23)])
     fig = json.loads((report / "report.json").read_text())
     assert fig["result"] == {"commissioned": True, "verified": True, "passed": True}
     assert [p["phase"] for p in fig["axes"][0]["phases"]] == ["start", "check", "params", "curves", "ct", "flash",
@@ -126,7 +126,7 @@ def test_the_demo_command(tmp_path, capsys):
     assert fig["axes"][1]["exchanges"] == fig["axes"][1]["exchanges_on_bus"]
     assert 1.0 < fig["bus"]["ratio"] and fig["bus"]["lower_bound_ms"] > 0
     assert (report / "report.md").read_text().startswith("# Commissioning report")
-    assert (report / "curve_1_node2.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert (report / "curve_1.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     from linmot_st.bus.trace import read_trace
     logged = read_trace(report / "can.log")
     assert len(logged) == len(read_trace(trace)) >= fig["bus"]["frames"]

@@ -1,5 +1,5 @@
-"""Curve plots for the report: each curve as written (the PVL's setpoints) and as read back, one PNG per
-curve and drive, with the difference below (matplotlib, Agg backend: no display needed).
+"""Curve plots for the report: each curve as written (the PVL's setpoints) and as read back from each
+drive, one PNG per curve, with the differences below (matplotlib, Agg backend: no display needed).
 
 "Read back" is what the PLC's VERIFY phase received on the bus (the 62h upload answers in the trace);
 without a verify pass it is the emulated drive's RAM, and the plot says which.
@@ -30,8 +30,9 @@ def read_back_from_trace(trace, node: int, curve_id: int, t0_ns: int = 0) -> lis
     return points
 
 
-def plot_curve(path: Path, curve, node: int, read_back: list[int] | None, source: str) -> Path:
-    """One PNG: the curve as written and as read back (if any), and their difference."""
+def plot_curve(path: Path, curve, read_backs: list[tuple[int, list[int] | None, str]]) -> Path:
+    """One PNG per curve: the curve as written, as read back from each drive (node, setpoints, source), and
+    the differences below."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -42,30 +43,35 @@ def plot_curve(path: Path, curve, node: int, read_back: list[int] | None, source
     step = info.x_length / (n - 1) if n > 1 else 0
     scale_x = TIME_UNIT_MS if timed else 1.0
     xs = [i * step * scale_x for i in range(n)]
-    written = [v * POSITION_UNIT_MM for v in curve.setpoints]
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True,
                                       gridspec_kw={"height_ratios": [3, 1]})
-    top.plot(xs, written, color="tab:blue", linewidth=2.5, label=f"as written ({n} setpoints, PVL)")
-    verdict = "not read back"
-    if read_back:
-        m = min(len(read_back), n)
-        back = [v * POSITION_UNIT_MM for v in read_back[:m]]
-        top.plot(xs[:m], back, color="tab:orange", linewidth=1.2, linestyle="--", marker="." if n <= 80 else None,
-                 label=f"as read back ({len(read_back)} setpoints, {source})")
-        diff = [(read_back[i] - curve.setpoints[i]) for i in range(m)]
-        bottom.plot(xs[:m], diff, color="tab:red", linewidth=1)
-        bad = sum(1 for d in diff if d) + abs(len(read_back) - n)
-        verdict = "read back = written" if not bad else f"{bad} setpoint(s) differ"
+    fig.subplots_adjust(left=0.14, right=0.97, top=0.9, bottom=0.1, hspace=0.08)
+    top.plot(xs, [v * POSITION_UNIT_MM for v in curve.setpoints], color="tab:blue", linewidth=3,
+             label=f"as written ({n} setpoints, PVL)")
+    verdicts = []
+    styles = ["--", ":", "-.", (0, (3, 1, 1, 1))]
+    colors = ["tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown", "tab:pink", "tab:olive", "tab:cyan"]
+    for k, (node, back, source) in enumerate(read_backs):
+        if not back:
+            verdicts.append(f"node {node}: not read back")
+            continue
+        m = min(len(back), n)
+        top.plot(xs[:m], [v * POSITION_UNIT_MM for v in back[:m]], linewidth=1.3, linestyle=styles[k % 4],
+                 color=colors[k % 8],
+                 marker="." if n <= 80 else None, label=f"node {node} as read back ({len(back)} setpoints, {source})")
+        diff = [back[i] - curve.setpoints[i] for i in range(m)]
+        bottom.plot(xs[:m], diff, linewidth=1, color=colors[k % 8], label=f"node {node}")
+        bad = sum(1 for d in diff if d) + abs(len(back) - n)
+        verdicts.append(f"node {node}: " + ("read back = written" if not bad else f"{bad} setpoint(s) differ"))
     bottom.axhline(0, color="grey", linewidth=0.6)
-    bottom.set_ylabel("read - written\n(0.1 um)")
+    bottom.set_ylabel("read - written\n(0.1 um)", fontsize=9)
     top.set_ylabel("position (mm)")
     bottom.set_xlabel("time (ms)" if timed else "encoder position (increments)")
     x_len = f"{info.x_length * TIME_UNIT_MS:g} ms" if timed else f"{info.x_length} increments"
-    top.set_title(f"node {node}, curve {info.curve_id} '{info.name}' ({info.kind}, {x_len})\n{verdict}", fontsize=10)
+    top.set_title(f"curve {info.curve_id} '{info.name}' ({info.kind}, {x_len})\n" + "; ".join(verdicts), fontsize=10)
     top.grid(True, alpha=0.3)
     bottom.grid(True, alpha=0.3)
     top.legend(loc="best", fontsize=8)
-    fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=100)
     plt.close(fig)

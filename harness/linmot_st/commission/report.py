@@ -268,7 +268,7 @@ class Report:
 
     # ------------------------------------------------------------------ files
     def write(self, folder: Path, trace_format: str = "log") -> dict:
-        """The report folder: report.md, report.json, can.<format>, curve_<id>_node<n>.png."""
+        """The report folder: report.md, report.json, can.<format>, curve_<id>.png."""
         from linmot_st.bus.trace import write_trace
 
         from .plots import plot_curve, read_back_from_trace
@@ -280,19 +280,20 @@ class Report:
         trace_name = f"can.{trace_format.lstrip('.')}"
         write_trace(self.run.trace, folder / trace_name)
         files["trace"] = trace_name
-        for ax in self.run.axes:
-            t_verify = next((p.t0_ns for p in ax.phases if p.phase == "verify"), None)
-            drive = self.run.drives.get(ax.node_id)
-            for c in self.pvl.curves:
+        for c in self.pvl.curves:
+            backs = []
+            for ax in self.run.axes:
+                t_verify = next((p.t0_ns for p in ax.phases if p.phase == "verify"), None)
+                drive = self.run.drives.get(ax.node_id)
                 back, source = None, ""
                 if t_verify is not None:
-                    back = read_back_from_trace(self.run.trace, ax.node_id, c.curve_id, t_verify)
-                    source = "PLC verify, from the bus"
+                    back, source = read_back_from_trace(self.run.trace, ax.node_id, c.curve_id, t_verify), "bus"
                 if not back and drive is not None and c.curve_id in drive.curves.ram:
-                    back, source = drive.curves.ram[c.curve_id].setpoints, "emulated drive's RAM"
-                name = f"curve_{c.curve_id}_node{ax.node_id}.png"
-                plot_curve(folder / name, c, ax.node_id, back, source)
-                files["plots"].append(name)
+                    back, source = drive.curves.ram[c.curve_id].setpoints, "drive RAM"
+                backs.append((ax.node_id, back, source))
+            name = f"curve_{c.curve_id}.png"
+            plot_curve(folder / name, c, backs)
+            files["plots"].append(name)
         files["json"] = "report.json"
         f["files"] = files
         (folder / "report.json").write_text(json.dumps(f, indent=2, default=_json_default) + "\n")

@@ -1,0 +1,181 @@
+"""Commissioning figures for `make bench`: examples/two_axes.pvl commissioned by plc_project on the simulated
+bus at 500 kbit/s, with the command's defaults (realistic drive timings, flash, reset, verify) and without
+the drive's slow services (write and verify only); the PLC's cost per scan; and what passing the dataset
+VAR_IN_OUT would cost per scan instead of the 2-word window (the design choice of docs/commissioning.md).
+
+Run: `python -m linmot_st.commission.bench` (or `make bench`).
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+PROBE = """
+TYPE
+  T_Big : ARRAY[1..{n}] OF DWORD;
+END_TYPE
+
+FUNCTION_BLOCK FB_InOut
+  (* reads one word of a dataset passed VAR_IN_OUT (copied in and out by MatIEC and the builtin backend) *)
+  VAR_IN_OUT
+    Ds : T_Big;
+  END_VAR
+  VAR_OUTPUT
+    Idx : UDINT := 1;
+    Sum : DWORD;
+  END_VAR
+  Sum := Sum XOR Ds[Idx];
+  Idx := Idx + 1;
+  IF Idx > {n} THEN
+    Idx := 1;
+  END_IF;
+END_FUNCTION_BLOCK
+
+FUNCTION_BLOCK FB_Window
+  (* gets the two words it asked for (FB_LmCommission's way) *)
+  VAR_INPUT
+    W0 : DWORD;
+    W1 : DWORD;
+  END_VAR
+  VAR_OUTPUT
+    Idx : UDINT := 1;
+    Sum : DWORD;
+  END_VAR
+  Sum := Sum XOR W0 XOR W1;
+  Idx := Idx + 1;
+  IF Idx >= {n} THEN
+    Idx := 1;
+  END_IF;
+END_FUNCTION_BLOCK
+
+PROGRAM Main
+  VAR
+    Mode : INT;
+    Ds : T_Big;
+    A1 : FB_InOut;
+    A2 : FB_InOut;
+    A3 : FB_InOut;
+    A4 : FB_InOut;
+    A5 : FB_InOut;
+    A6 : FB_InOut;
+    A7 : FB_InOut;
+    A8 : FB_InOut;
+    B1 : FB_Window;
+    B2 : FB_Window;
+    B3 : FB_Window;
+    B4 : FB_Window;
+    B5 : FB_Window;
+    B6 : FB_Window;
+    B7 : FB_Window;
+    B8 : FB_Window;
+  END_VAR
+  IF Mode = 1 THEN
+    A1(Ds := Ds); A2(Ds := Ds); A3(Ds := Ds); A4(Ds := Ds); A5(Ds := Ds); A6(Ds := Ds); A7(Ds := Ds); A8(Ds := Ds);
+  ELSIF Mode = 2 THEN
+    B1(W0 := Ds[B1.Idx], W1 := Ds[B1.Idx + 1]); B2(W0 := Ds[B2.Idx], W1 := Ds[B2.Idx + 1]);
+    B3(W0 := Ds[B3.Idx], W1 := Ds[B3.Idx + 1]); B4(W0 := Ds[B4.Idx], W1 := Ds[B4.Idx + 1]);
+    B5(W0 := Ds[B5.Idx], W1 := Ds[B5.Idx + 1]); B6(W0 := Ds[B6.Idx], W1 := Ds[B6.Idx + 1]);
+    B7(W0 := Ds[B7.Idx], W1 := Ds[B7.Idx + 1]); B8(W0 := Ds[B8.Idx], W1 := Ds[B8.Idx + 1]);
+  END_IF;
+END_PROGRAM
+
+CONFIGURATION Config0
+  RESOURCE Res0 ON PLC
+    TASK T1(INTERVAL := T#1ms, PRIORITY := 0);
+    PROGRAM Inst0 WITH T1 : Main;
+  END_RESOURCE
+END_CONFIGURATION
+"""
+
+
+def _fig(name, value, unit, target=None):
+    return dict(name=name, value=value, unit=unit, target=target)
+
+
+def _scan_us(plc, scans: int = 20_000) -> float:
+    plc.step(100)
+    t0 = time.perf_counter()
+    plc.step(scans)
+    return (time.perf_counter() - t0) / scans * 1e6
+
+
+def _commission(axes: int, **kw):
+    from .testing import commission
+    t0 = time.perf_counter()
+    o = commission(axes=axes, **kw)
+    wall = time.perf_counter() - t0
+    assert all(a.done for a in o.result.axes) and o.verification.ok, o.report.text()
+    return o, wall
+
+
+def run() -> list[dict]:
+    from linmot_st.plc import Plc
+    from linmot_st.toolchain import build
+
+    from .testing import project_build
+
+    out = []
+    t0 = time.perf_counter()
+    res = project_build()
+    out.append(_fig(f"plc_project build ({res.backend}, {'cached' if res.cached else 'cold'})",
+                    time.perf_counter() - t0, "s"))
+    full = dict(timings="real", reset=True)                      # `linmot-st commission` defaults
+    o1, wall1 = _commission(1, **full)
+    o2, wall2 = _commission(2, **full)
+    f1, f2 = o1.report.figures, o2.report.figures
+    out += [
+        _fig("1 axis, defaults (flash, reset, verify): PLC time", f1["run"]["time_ms"], "ms"),
+        _fig("1 axis: transfer phases (check..CT, verify)", f1["axes"][0]["transfer"]["time_ms"], "ms"),
+        _fig("1 axis: SDO exchanges", f1["axes"][0]["exchanges"], ""),
+        _fig("1 axis: run time / bus lower bound", f1["bus"]["ratio"], "x"),
+        _fig("1 axis: wall time of the run", wall1, "s", "<= 2"),
+        _fig("2 axes in parallel, defaults: PLC time", f2["run"]["time_ms"], "ms",
+             f"<= {f1['run']['time_ms'] * 1.01:.0f}"),
+        _fig("2 axes: SDO exchanges (both)", f2["run"]["exchanges"], ""),
+        _fig("2 axes: run time / bus lower bound", f2["bus"]["ratio"], "x"),
+        _fig("2 axes: bus load over the run", 100 * f2["bus"]["load"], "%"),
+        _fig("2 axes: wall time of the run", wall2, "s", "<= 3"),
+    ]
+    o3, _ = _commission(1, flash=False, reset=False)
+    o4, wall4 = _commission(2, flash=False, reset=False)
+    f3, f4 = o3.report.figures, o4.report.figures
+    per_exchange = [p["scans_per_exchange"] for p in f3["axes"][0]["phases"]
+                    if p["phase"] in ("check", "params", "curves", "ct")]
+    out += [
+        _fig("write + verify only, 1 axis: PLC time", f3["run"]["time_ms"], "ms"),
+        _fig("write + verify only, 1 axis: time / bus lower bound", f3["bus"]["ratio"], "x"),
+        _fig("write phases: scans per exchange (worst phase)", max(per_exchange), "", "<= 1.0"),
+        _fig("write + verify only, 2 axes: PLC time", f4["run"]["time_ms"], "ms"),
+        _fig("write + verify only, 2 axes: time / bus lower bound", f4["bus"]["ratio"], "x", "<= 1.3"),
+        _fig("write + verify only, 2 axes: bus load", 100 * f4["bus"]["load"], "%"),
+        _fig("write + verify only, 2 axes: wall time", wall4, "s"),
+    ]
+    # the PLC's own cost per scan (C only, no bus): plc_project with 8 axes, all waiting for their drives
+    plc = Plc(res)
+    plc["MAIN.AXES"] = 8
+    plc["MAIN.START"] = True
+    out.append(_fig(f"plc_project scan, 8 axes idle ({res.backend})", _scan_us(plc), "us"))
+    # VAR_IN_OUT dataset vs the 2-word window, 8 FBs per scan, on each backend available
+    from linmot_st.toolchain import builtin_available, matiec_available
+    folder = Path(__file__).resolve().parents[3] / "build" / "bench" / "commission"
+    folder.mkdir(parents=True, exist_ok=True)
+    for backend, ok in (("matiec", matiec_available()), ("builtin", builtin_available())):
+        if not ok:
+            continue
+        for n, label in ((652, "two_axes, 2.5 KiB"), (16384, "64 KiB")):
+            path = folder / f"inout_{n}.st"
+            path.write_text(PROBE.format(n=n))
+            p = Plc(build(path, backend=backend))
+            p["INST0.MODE"] = 1
+            inout = _scan_us(p)
+            p["INST0.MODE"] = 2
+            window = _scan_us(p)
+            out += [_fig(f"dataset {label}: 8 FBs per scan, VAR_IN_OUT ({backend})", inout, "us"),
+                    _fig(f"dataset {label}: 8 FBs per scan, 2-word window ({backend})", window, "us")]
+    return out
+
+
+if __name__ == "__main__":
+    for f in run():
+        print(f"{f['name']:<70} {f['value']:>12.4g} {f['unit']:<3} {f['target'] or ''}")
