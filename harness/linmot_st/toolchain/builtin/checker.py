@@ -443,13 +443,13 @@ class Checker:
         table = pou.vars if table is None else table
         owner = pou.kind if pou else "resource"
         if isinstance(ty, T.PouType):
-            if pou is None:
-                self.error(decl.spec.pos, "function block instances as global variables are outside the supported subset")
             if ty.pou.kind == "PROGRAM":
                 self.error(decl.spec.pos, "a PROGRAM cannot be instantiated as a variable")
-            if pou.kind == "FUNCTION":
+            if pou is not None and pou.kind == "FUNCTION":
                 self.error(decl.spec.pos, "a FUNCTION cannot hold function block instances")
-            if kind in ("VAR_OUTPUT", "VAR_EXTERNAL", "VAR_TEMP"):
+            if decl.location:
+                self.error(decl.pos, "a located function block instance is outside the supported subset")
+            if kind in ("VAR_OUTPUT", "VAR_TEMP"):
                 self.error(decl.spec.pos, f"function block instances in {kind} are outside the supported subset")
             if kind in ("VAR_INPUT", "VAR_IN_OUT"):
                 self.error(decl.spec.pos, f"a function block instance as {kind} is outside the supported subset "
@@ -548,6 +548,9 @@ class Checker:
                     res.programs.append(self.declare_program_instance(pnode, res))
                 except _Abort:
                     pass
+            for g in list(res.globals.values()) + list(cfg.globals.values()):
+                if g.is_fb_instance:
+                    self.check_externals(g.ty.pou, res, g.pos, set())
             cfg.resources.append(res)
         if not any(t.interval_ns for r in cfg.resources for t in r.tasks):
             self.report(node.pos, "at least one periodic TASK (with an INTERVAL) is required (MatIEC)")

@@ -271,6 +271,8 @@ class CodeGen:
 
     def member_decl(self, v: Var) -> str:
         if v.is_fb_instance:
+            if v.kind == "VAR_EXTERNAL":
+                return f"  {v.ty.cname} *{v.key};"
             return f"  {v.ty.cname} {v.key};"
         c = self.wrap(v.ty)
         if v.kind == "VAR_EXTERNAL" or v.location:
@@ -304,6 +306,9 @@ class CodeGen:
         for cell in self.prog.located.values():
             lines.append(f"static {cname_of(cell.ty)} {cell.cname};")
         for cname, _, v, _ in self.global_vars():
+            if v.is_fb_instance:
+                lines.append(f"static {v.ty.cname} {cname};")
+                continue
             c = self.wrap(v.ty)
             kind = "__P_" if v.location else "__V_"
             lines.append(f"static {kind}{c} {cname};")
@@ -369,6 +374,15 @@ class CodeGen:
 
     def init_member(self, v: Var, prefix: str) -> list[str]:
         lines = []
+        if v.is_fb_instance and v.kind == "VAR_EXTERNAL":
+            lines.append(f"  {prefix}{v.key} = 0;")
+            cases = self.external_targets(v)
+            if cases:
+                lines.append("  switch (res__) {")
+                for idx, target in cases:
+                    lines.append(f"  case {idx}: {prefix}{v.key} = &{target}; break;")
+                lines.append("  }")
+            return lines
         if v.is_fb_instance:
             lines.append(f"  {v.ty.pou.key}_init__(&{prefix}{v.key}, res__);")
             if isinstance(v.init, A.StructInit):
@@ -421,7 +435,10 @@ class CodeGen:
                 if g is None:
                     continue
                 target = f"{cfg.key}__{g.key}"
-            out.append((i, f"(*{target}.value)" if g.location else f"{target}.value"))
+            if g.is_fb_instance:
+                out.append((i, target))
+            else:
+                out.append((i, f"(*{target}.value)" if g.location else f"{target}.value"))
         return out
 
     def body_code(self, p: PouSym) -> list[str]:
@@ -458,6 +475,8 @@ class CodeGen:
                     return f"(*{self.local_name(v)})", None
                 return self.local_name(v), None
             if v.is_fb_instance:
+                if v.kind == "VAR_EXTERNAL":
+                    return f"(*data__->{v.key})", None
                 return f"data__->{v.key}", None
             if v.kind == "VAR_EXTERNAL" or v.location:
                 return f"(*data__->{v.key}.value)", f"data__->{v.key}.flags"
@@ -1068,7 +1087,7 @@ class CodeGen:
         self.pou = None
         if cfg is not None:
             for cname, _, v, r in self.global_vars():
-                lines.extend(self.init_global(cname, v))
+                lines.extend(self.init_global(cname, v, cfg.resources.index(r) if r is not None else 0))
             for ri, r in enumerate(cfg.resources):
                 for inst in r.programs:
                     lines.append(f"  {inst.pou.key}_init__(&{r.key}__{inst.key}, {ri});")
@@ -1096,7 +1115,14 @@ class CodeGen:
         lines.append("")
         return lines
 
-    def init_global(self, cname: str, v: Var) -> list[str]:
+    def init_global(self, cname: str, v: Var, res_index: int = 0) -> list[str]:
+        if v.is_fb_instance:
+            lines = [f"  {v.ty.pou.key}_init__(&{cname}, {res_index});"]
+            if isinstance(v.init, A.StructInit):
+                for k, node in self.value_of(v.init, v.ty).items():
+                    mv = v.ty.pou.vars[k]
+                    lines.append(f"  {cname}.{k}.value = {self.c_value_expr(mv.ty, self.value_of(node, mv.ty))};")
+            return lines
         val = self.value_of(v.init, v.ty) if v.init is not None else self.default_value(v.ty)
         lines = [f"  {cname}.flags = 0;"]
         if v.location:
@@ -1133,7 +1159,7 @@ class CodeGen:
     def member_ref(self, v: Var, types: dict) -> str:
         inner = self.type_ref(v.ty, types)
         if v.is_fb_instance:
-            return inner
+            return "ref:" + inner if v.kind == "VAR_EXTERNAL" else inner
         if v.kind == "VAR_EXTERNAL" or v.location:
             return "ptr:" + inner
         return "var:" + inner
@@ -1155,7 +1181,10 @@ class CodeGen:
         for t in self.prog.types:
             self.type_ref(t, types)
         for cname, path, v, _ in self.global_vars():
-            ref = ("ptr:" if v.location else "var:") + self.type_ref(v.ty, types)
+            if v.is_fb_instance:
+                ref = self.type_ref(v.ty, types)
+            else:
+                ref = ("ptr:" if v.location else "var:") + self.type_ref(v.ty, types)
             roots.append((path, ref, f"&{cname}"))
         if cfg is not None:
             for r in cfg.resources:
@@ -1168,7 +1197,7 @@ class CodeGen:
         seen = set()
 
         def add_check(ref: str):
-            if ref not in seen:
+            if ref not in seen and not ref.startswith("ref:"):
                 seen.add(ref)
                 size_checks.append(ref)
 
