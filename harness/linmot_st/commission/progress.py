@@ -10,7 +10,13 @@ BAR = 12
 LABELS = {"start": "start", "check": "compatibility check", "params": "parameters", "curves": "curves",
           "ct": "command table", "flash": "flash save", "reset": "reset", "verify": "verify"}
 UNITS = {"check": "layers", "params": "parameters", "curves": "curves", "ct": "entries",
-         "flash": "services", "reset": "reset", "verify": "items"}
+         "flash": "services", "reset": "resets", "verify": "items"}
+SINGULAR = {"layers": "layer", "parameters": "parameter", "curves": "curve", "entries": "entry",
+            "services": "service", "resets": "reset", "items": "item"}
+
+
+def _n(k: int, word: str) -> str:
+    return f"{k} {word}{'' if k == 1 else 's'}"
 
 
 def _ms(ns: int) -> str:
@@ -30,8 +36,10 @@ class Progress:
         if rec.phase == "start":
             return
         unit = UNITS.get(rec.phase, "items")
+        if rec.items_total == 1:
+            unit = SINGULAR.get(unit, unit)
         self._line(f"{_ms(t_ns)}  node {ax.node_id:<3} {LABELS.get(rec.phase, rec.phase):<19} done: "
-                   f"{rec.items_total} {unit}, {rec.exchanges} exchanges, {rec.scans} scans")
+                   f"{rec.items_total} {unit}, {_n(rec.exchanges, 'exchange')}, {_n(rec.scans, 'scan')}")
 
     def axis_finished(self, ax, rec, t_ns: int) -> None:
         if ax.done:
