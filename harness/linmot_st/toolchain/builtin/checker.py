@@ -386,6 +386,10 @@ class Checker:
                     self.error(node.return_spec.pos, "a FUNCTION must return a named array type")
                 pou.return_type = rt
                 pou.result = Var(node.name, k, rt, "RESULT", node.pos, pou=pou)
+                true = A.Literal(node.pos, "bool", True, None, "TRUE")
+                pou.vars["EN"] = Var("EN", "EN", T.BOOL, "VAR_INPUT", node.pos, init=true, pou=pou, implicit=True)
+                pou.vars["ENO"] = Var("ENO", "ENO", T.BOOL, "VAR_OUTPUT", node.pos, init=true, pou=pou,
+                                      implicit=True)
             else:
                 en = Var("EN", "EN", T.BOOL, "VAR_INPUT", node.pos, pou=pou, implicit=True)
                 en.init = A.Literal(node.pos, "bool", True, None, "TRUE")
@@ -1229,7 +1233,7 @@ class Checker:
                 self.error(e.pos, f"recursive call of {pou.name} (recursion is outside the supported subset)")
             if not e.args:
                 self.error(e.pos, f"a call of FUNCTION {pou.name} needs at least one argument (MatIEC)")
-            bound = self.bind_args(e, pou.params, pou, allow_en=False)
+            bound = self.bind_args(e, pou.params, pou, allow_en=True)
             e.target = (pou, None, bound)
             self.note_callee(pou)
             return pou.return_type

@@ -333,7 +333,7 @@ class CodeGen:
         return f"l_{v.key}"
 
     def function_code(self, p: PouSym) -> list[str]:
-        params = []
+        params = ["BOOL *o_ENO"]
         for v in p.params:
             c = cname_of(v.ty)
             if v.kind == "VAR_INPUT":
@@ -345,7 +345,7 @@ class CodeGen:
         rt = cname_of(p.return_type)
         lines = [f"static {rt} {p.key}({', '.join(params) or 'void'})", "{"]
         for v in p.vars.values():
-            if v.kind in ("VAR", "VAR_TEMP", "VAR_OUTPUT"):
+            if v.kind in ("VAR", "VAR_TEMP", "VAR_OUTPUT") or v.implicit:      # EN is TRUE: the body runs
                 val = self.value_of(v.init, v.ty) if v.init is not None else self.default_value(v.ty)
                 lines.append(f"  {cname_of(v.ty)} {self.local_name(v)} = {self.c_init(v.ty, val)};")
         lines.append(f"  {rt} l_{p.key} = {self.c_init(p.return_type, self.default_value(p.return_type))};")
@@ -357,6 +357,7 @@ class CodeGen:
         for v in p.params:
             if v.kind == "VAR_OUTPUT":
                 lines.append(f"  if (o_{v.key}) *o_{v.key} = {self.local_name(v)};")
+        lines.append("  if (o_ENO) *o_ENO = l_ENO;")
         lines.append(f"  return l_{p.key};")
         lines.append("}")
         lines.append("")
@@ -834,6 +835,17 @@ class CodeGen:
         pou, _, bound = e.target
         by_param = {p.key: a for p, a in bound}
         args, pre, post = [], [], []
+        en_arg, eno_arg = by_param.get("EN"), by_param.get("ENO")
+        en = None
+        if en_arg is not None:
+            # MatIEC evaluates every argument, then skips the body when EN is FALSE
+            en = self.new_tmp()
+            pre.append(f"BOOL {en} = {self.expr(en_arg.value)};")
+        eno = None
+        if eno_arg is not None:
+            eno = self.new_tmp()
+            pre.append(f"BOOL {eno} = 1;")
+        args.append(f"&{eno}" if eno else "0")
         # VAR_IN_OUT is passed by reference, which means the same as MatIEC's copy-in/copy-out unless two
         # in-out arguments overlap (then: copies) or the actual is forced (then: a throw-away copy)
         roots = [_root(a.value) for p, a in bound if p.kind == "VAR_IN_OUT"]
@@ -846,7 +858,12 @@ class CodeGen:
                     args.append(self.c_value_expr(p.ty, val))
                 else:
                     v = self.expr(a.value)
-                    args.append(f"__ns2t({v})" if is_time(p.ty) else v)
+                    v = f"__ns2t({v})" if is_time(p.ty) else v
+                    if en is not None:
+                        tmp = self.new_tmp()
+                        pre.append(f"{cname_of(p.ty)} {tmp} = {v};")
+                        v = tmp
+                    args.append(v)
             elif p.kind == "VAR_IN_OUT" and a is not None and by_ref:
                 src, flags = self.place(a.value)
                 if flags is None:
@@ -877,6 +894,19 @@ class CodeGen:
                     tp, tflags = self.place(a.value)
                     post.append(f"if (!({tflags} & {FORCE})) {tp} = {tmp};" if tflags else f"{tp} = {tmp};")
         call = f"{pou.key}({', '.join(args)})"
+        if eno_arg is not None:
+            tp, tflags = self.place(eno_arg.value)
+            store = f"if (!({tflags} & {FORCE})) {tp} = {eno};" if tflags else f"{tp} = {eno};"
+        if en is not None:
+            r = self.new_tmp()
+            rt = cname_of(pou.return_type)
+            default = self.c_value_expr(pou.return_type, self.default_value(pou.return_type))
+            text = "({ " + " ".join(pre) + f" {rt} {r}; if ({en}) {{ {r} = {call}; " + " ".join(post) + \
+                f" }} else {{ {r} = {default};{f' {eno} = 0;' if eno else ''} }}" + \
+                (f" {store}" if eno_arg is not None else "") + f" {r}; }})"
+            return self.read(text, pou.return_type)
+        if eno_arg is not None:
+            post.append(store)
         if pre or post:
             r = self.new_tmp()
             call = "({ " + " ".join(pre) + f" {cname_of(pou.return_type)} {r} = {call}; " + " ".join(post) + f" {r}; }})"
