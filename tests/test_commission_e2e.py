@@ -132,6 +132,20 @@ def test_the_demo_command(tmp_path, capsys):
     assert len(logged) == len(read_trace(trace)) >= fig["bus"]["frames"]
 
 
+def test_progress_on_a_terminal_and_in_a_log():
+    import io
+    from linmot_st.commission.progress import Progress
+
+    tty, log = io.StringIO(), io.StringIO()
+    commission(axes=2, verify=False, progress=Progress(tty, tty=True, interval_s=0))
+    commission(axes=2, verify=False, progress=Progress(log, tty=False))
+    assert "\r\x1b[2K" in tty.getvalue() and "node 2: curves [" in tty.getvalue()     # the redrawn status line
+    lines = log.getvalue().splitlines()
+    assert "\r" not in log.getvalue() and len(lines) == 2 * 6                          # 5 phases + the end, per axis
+    assert lines[0].endswith("node 1   compatibility check done: 2 layers, 6 exchanges, 6 scans")
+    assert lines[-1].endswith("node 2   commissioned")
+
+
 def test_virtual_bus_in_real_time():
     if os.environ.get("CI_NO_REALTIME"):
         pytest.skip("real-time tests disabled")

@@ -345,13 +345,18 @@ def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s) -
     plc_bus = None
     bit_ns = 1_000_000_000 // opts.bitrate
     try:
+        def opened():
+            try:
+                return open_bus(spec, bitrate=opts.bitrate)
+            except OSError as exc:
+                raise OSError(f"--bus {opts.bus}: cannot open it ({exc}); SocketCAN needs a Linux kernel with "
+                              "CAN support and the interface up (docs/bus.md)") from exc
+
         if opts.emulate:
             for n in nodes:
-                b = open_bus(spec, bitrate=opts.bitrate)
-                drive_buses.append(b)
-                d = factory(n)
-                drives[n] = d
-        plc_bus = _RecordingBus(open_bus(spec, bitrate=opts.bitrate), time.monotonic_ns(), bit_ns)
+                drive_buses.append(opened())
+                drives[n] = factory(n)
+        plc_bus = _RecordingBus(opened(), time.monotonic_ns(), bit_ns)
         for b, d in zip(drive_buses, drives.values()):
             d.attach(b)                                  # switched on now: boots after its boot time
         sim = RealTimeCoSim(plc, plc_bus, mailbox=MAILBOX)

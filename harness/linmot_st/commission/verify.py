@@ -125,8 +125,10 @@ def verify(pvl, drives: dict, opts) -> Verification:
         return v
     curves = {c.curve_id: (c.info_block, list(c.setpoints)) for c in pvl.curves}
     entries = {e.entry_id: e.data for e in pvl.command_table}
+    has_params = any(obj.parameters for obj in pvl.parameter_objects)
     for node, drive in sorted(drives.items()):
-        v.checks += _params(pvl, drive, node, opts)
+        if has_params:
+            v.checks += _params(pvl, drive, node, opts)
         stores = [("RAM", True)] + ([("flash", True)] if opts.flash else [])
         if curves:
             for name, _ in stores:
