@@ -12,8 +12,11 @@ import pytest
 
 from linmot_st.cli import main
 from linmot_st.commission.dataset import INFO_WORDS
-from linmot_st.commission.testing import EXAMPLE, commission, example
-from linmot_st.toolchain.testing import BACKEND_PARAMS
+from linmot_st.commission.testing import EXAMPLE, commission, example, use_local_matiec
+
+use_local_matiec()                                   # before BACKEND_PARAMS looks for iec2c
+
+from linmot_st.toolchain.testing import BACKEND_PARAMS  # noqa: E402
 
 PVL = example()
 CURVE_EXCHANGES = 1 + sum(1 + INFO_WORDS + len(c.setpoints) for c in PVL.curves)   # 41h, then 50h, 54h x 18, 53h x N

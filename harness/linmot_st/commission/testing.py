@@ -13,8 +13,13 @@ from .project import REPO, build_project, prepare
 EXAMPLE = REPO / "examples" / "two_axes.pvl"
 _builds: dict[str, Any] = {}
 
-if not os.environ.get("IEC2C") and not os.environ.get("MATIEC_HOME") and Path("/opt/matiec-src/iec2c").exists():
-    os.environ["MATIEC_HOME"] = "/opt/matiec-src"     # this machine's hand-built MatIEC (never in the repo)
+
+
+def use_local_matiec() -> None:
+    """For the test modules: the development machines' MatIEC, built by hand in /opt/matiec-src (never in the
+    repository), unless IEC2C or MATIEC_HOME says otherwise. Tests skip MatIEC where it is absent."""
+    if not os.environ.get("IEC2C") and not os.environ.get("MATIEC_HOME") and Path("/opt/matiec-src/iec2c").exists():
+        os.environ["MATIEC_HOME"] = "/opt/matiec-src"
 
 
 def example():
