@@ -221,3 +221,24 @@ def test_command_line_errors(tmp_path, capsys):
     bad.write_text("@FileType,PVL\n@FormatVersion,1\n@StartObject,Curve\n")
     assert main(["commission", str(bad)]) == 1
     assert "bad.pvl:" in capsys.readouterr().err
+
+
+def test_a_plc_fault_ends_the_run_and_is_reported():
+    """A header that claims more words than the array holds lets the FB ask beyond it: the program's
+    Ds[DataIndex] is then an index out of range, a PLC fault, which the report names."""
+    curve = WORDS.index(dsf.TAG_CURVE << 24 | 23 << 16 | 10) + 1
+
+    def patch(plc):
+        plc[f"{DS}[4]"] = 100_000                                   # total words
+        plc[f"{DS}[{curve}]"] = dsf.TAG_CURVE << 24 | 23 << 16 | 5000
+        plc[f"{DS}[{curve + 2}]"] = 0x0004_0000 | 5000             # info block: 5000 setpoints of 4 bytes
+
+    o = commission(axes=1, prepare_plc=patch)
+    assert o.result.fault and not o.result.commissioned
+    text = o.report.text()
+    assert "PLC FAULT:" in text and "result: FAILED (the PLC faulted" in text
+    assert "array index out of range in POU PLCCOMMISSION (plc_project/commission.st:" in text
+    assert "node 1: did not finish" in text and o.result.t_end_ns > o.result.t_start_ns
+    # setpoint j is word curve + 19 + j; sending it, the FB asks for words curve + 20 + j and the next one:
+    # the program's Ds[DataIndex + 1] faults once that passes word 652
+    assert o.axis(1).exchanges == 6 + 30 + 1 + 1 + 18 + (652 - 20 - curve + 1)

@@ -101,6 +101,7 @@ class Report:
             axes=axes,
             run=dict(start_ms=r.t_start_ns / 1e6, end_ms=r.t_end_ns / 1e6, time_ms=span / 1e6,
                      exchanges=total_ex, scans=r.scans, wall_s=round(r.wall_s, 3), timed_out=r.timed_out,
+                     plc_fault=r.fault,
                      overruns=r.overruns, max_lateness_ms=r.max_lateness_ns / 1e6),
             bus=dict(frames=st.frames if st else 0, errors=st.errors if st else 0,
                      load=st.load if st else 0.0, busy_ms=(st.busy_ns / 1e6) if st else 0.0,
@@ -213,7 +214,8 @@ class Report:
             f"run: {run['time_ms']:.1f} ms of PLC time from the first start to the last end, {run['exchanges']} exchanges, "
             f"{run['scans']} scans in {run['wall_s']:.2f} s wall"
             + (f", {run['overruns']} late scans (max {run['max_lateness_ms']:.1f} ms)" if o["bus"] != "sim" else "")
-            + (" - TIMED OUT" if run["timed_out"] else ""),
+            + (" - TIMED OUT" if run["timed_out"] else "")
+            + (f" - PLC FAULT: {run['plc_fault']}" if run["plc_fault"] else ""),
             f"bus: {bus['frames']} frames, load {100 * bus['load']:.1f} % (busy {bus['busy_ms']:.1f} ms), "
             f"stuff bits add {100 * (bus['stuffing_ratio'] - 1):.1f} %" if bus["stuffing_ratio"] else
             f"bus: {bus['frames']} frames",
@@ -244,7 +246,10 @@ class Report:
         why = []
         if not res["commissioned"]:
             bad = [str(a["node"]) for a in f["axes"] if a["result"] != "done"]
-            why.append(f"commissioning failed on node{'s' if len(bad) > 1 else ''} {', '.join(bad)}")
+            if run["plc_fault"]:
+                why.append("the PLC faulted")
+            elif bad:
+                why.append(f"commissioning failed on node{'s' if len(bad) > 1 else ''} {', '.join(bad)}")
         if not res["verified"]:
             why.append("verification " + ("not done" if v.skipped else "found differences"))
         lines += ["", f"result: {verdict}" + (f" ({'; '.join(why)})" if why else

@@ -133,6 +133,7 @@ class RunResult:
     scans: int = 0
     wall_s: float = 0.0
     timed_out: bool = False
+    fault: str = ""                            # a PLC fault (division by zero, index out of range) ended the run
     overruns: int = 0
     max_lateness_ns: int = 0
     stats: Any = None                          # BusStats over the commissioning span
@@ -149,7 +150,7 @@ class RunResult:
 
     @property
     def commissioned(self) -> bool:
-        return all(a.done for a in self.axes) and not self.timed_out
+        return all(a.done for a in self.axes) and not self.timed_out and not self.fault
 
 
 class Sampler:
@@ -209,6 +210,14 @@ class Sampler:
                 self.progress.tick(self, plc.time_ns)
         self.scans += 1
         return all(a.finished for a in self.axes)
+
+    def close(self) -> None:
+        """After the run: an axis still in a phase (timeout, PLC fault) ends it at the last scan."""
+        for k, (ax, vs) in enumerate(zip(self.axes, self._vars)):
+            if ax.phases and not ax.finished and not ax.phases[-1].t1_ns:
+                cur = ax.phases[-1]
+                cur.t1_ns, cur.scan1 = self.plc.time_ns, max(self.scans - 1, cur.scan0)
+                cur.exchanges = vs["exch"].value - cur.exch0
 
     def live(self, k: int) -> tuple[str, int, int]:
         """(phase, items done, items total) of axis k (0-based) now."""
@@ -291,16 +300,20 @@ def _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, time
     if prepare_plc:
         prepare_plc(plc)
     sampler = Sampler(plc, nodes, progress)
+    from linmot_st.plc import PlcFault
     wall0 = time.perf_counter()
-    timed_out = False
+    timed_out, fault = False, ""
     try:
         sim.run_until(sampler, max_scans=int(timeout_s * 1e9 // plc.tick_ns))
     except CoSimTimeout:
         timed_out = True
+    except PlcFault as exc:
+        fault = str(exc)
     wall = time.perf_counter() - wall0
+    sampler.close()
     _collect(plc, sampler)
     res = RunResult(opts, nodes, plc.tick_ns, bus.bit_ns, sampler.axes, list(bus.trace), drives,
-                    scans=sim.scans, wall_s=wall, timed_out=timed_out)
+                    scans=sim.scans, wall_s=wall, timed_out=timed_out, fault=fault)
     res.stats = bus.stats(res.t_start_ns, max(res.t_end_ns, res.t_start_ns))
     return res
 
@@ -365,13 +378,17 @@ def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s) -
             prepare_plc(plc)
         sampler = Sampler(plc, nodes, progress)
         plc_bus.t0 = time.monotonic_ns()                 # trace times = PLC times
+        from linmot_st.plc import PlcFault
         wall0 = time.perf_counter()
-        timed_out = False
+        timed_out, fault = False, ""
         try:
             sim.run_until(sampler, timeout_s=timeout_s)
         except CoSimTimeout:
             timed_out = True
+        except PlcFault as exc:
+            fault = str(exc)
         wall = time.perf_counter() - wall0
+        sampler.close()
     finally:
         for d in drives.values():
             d.detach()
@@ -383,6 +400,7 @@ def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s) -
     # PLC time and wall time run together in a real-time run (scan k at wall start + k ticks)
     trace = sorted(plc_bus.records, key=lambda r: r.end_ns)
     res = RunResult(opts, nodes, plc.tick_ns, bit_ns, sampler.axes, trace, drives, scans=sim.scans,
-                    wall_s=wall, timed_out=timed_out, overruns=sim.overruns, max_lateness_ns=sim.max_lateness_ns)
+                    wall_s=wall, timed_out=timed_out, fault=fault, overruns=sim.overruns,
+                    max_lateness_ns=sim.max_lateness_ns)
     res.stats = bus_stats(trace, bit_ns, res.t_start_ns, max(res.t_end_ns, res.t_start_ns))
     return res
