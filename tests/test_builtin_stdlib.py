@@ -7,7 +7,6 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-import pytest
 
 from linmot_st.toolchain.builtin import BuiltinCompileError, check_text
 from linmot_st.toolchain.builtin import stdfuncs

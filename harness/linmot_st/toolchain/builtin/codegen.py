@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from . import ast as A
 from . import stdfuncs as SF
 from . import types as T
-from .symbols import PouSym, Program, ResourceSym, Var
+from .symbols import PouSym, Program, Var
 
 FORCE = "__FORCED"
 
