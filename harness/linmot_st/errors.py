@@ -18,6 +18,7 @@ Scheme (ErrorID is a WORD; the high byte is the group):
   16#04xx  an E1100 result code rr (byte 6 of the 60h download response, byte 4 of a curve-get answer):
            ErrorID = 16#0400 + rr, for every rr; the known codes are named below
   16#05xx  firmware compatibility (the seeds' table 5 rules)
+  16#06xx  commissioning (FB_LmCommission): the dataset, the requested options, the read-back
 """
 
 from __future__ import annotations
@@ -100,6 +101,10 @@ ERRORS: tuple[ErrorDef, ...] = (
     ErrorDef("TreeIdMismatch", 0x0501, "firmware layer: tree ID of the source differs from the drive's"),
     ErrorDef("MainVersionMismatch", 0x0502, "firmware layer: main version of the source differs from the drive's"),
     ErrorDef("SubVersionNewer", 0x0503, "firmware layer: sub version of the source is newer than the drive's"),
+    # 06xx commissioning
+    ErrorDef("DatasetInvalid", 0x0601, "commissioning dataset malformed: magic word, format version, counts or record order wrong (FailStep = the word index)"),
+    ErrorDef("ResetNeedsFlash", 0x0602, "reset requested without the flash save while the dataset holds curves or command-table entries (the reset would lose them)"),
+    ErrorDef("VerifyMismatch", 0x0603, "read-back differs from the dataset (FailItem, FailStep, FailExpected, FailActual say where)"),
 )
 
 BY_VALUE: dict[int, ErrorDef] = {e.value: e for e in ERRORS}
@@ -172,7 +177,7 @@ def render_st() -> str:
         "   `python -m linmot_st.errors --write`: edit the Python table, not this file.",
         "   Every FB holds one instance `E : T_LmErrorIds` and reports `E.<Name>`; the members' initial",
         "   values are the numbers. Groups: 01xx invalid input, 02xx channel, 03xx transfer,",
-        "   04xx E1100 result code rr (16#0400 + rr), 05xx firmware compatibility. *)",
+        "   04xx E1100 result code rr (16#0400 + rr), 05xx firmware compatibility, 06xx commissioning. *)",
         "TYPE",
         "  T_LmErrorIds : STRUCT",
     ]

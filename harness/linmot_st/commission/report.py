@@ -14,7 +14,7 @@ import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .codes import describe
+from linmot_st.errors import describe
 from .dataset import Dataset
 from .runner import RunResult
 from .verify import Verification
