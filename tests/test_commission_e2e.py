@@ -11,7 +11,7 @@ import os
 import pytest
 
 from linmot_st.cli import main
-from linmot_st.commission.dataset import INFO_WORDS
+from linmot_st.pvl.dataset import INFO_WORDS
 from linmot_st.commission.testing import EXAMPLE, commission, example, use_local_matiec
 
 use_local_matiec()                                   # before BACKEND_PARAMS looks for iec2c

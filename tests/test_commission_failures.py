@@ -11,7 +11,7 @@ import dataclasses
 import pytest
 
 from linmot_st.cli import main
-from linmot_st.commission import dataset as dsf
+from linmot_st.pvl import dataset as dsf
 from linmot_st.commission.testing import EXAMPLE, commission, example, use_local_matiec
 from linmot_st.emulator import DriveTimings, E1100Drive, load_profile
 

@@ -1,5 +1,5 @@
 """The ST side of the commissioning and the Python side agree: the ErrorIDs (in the library's one table),
-the dataset format constants (T_LmDsFormat vs linmot_st.commission.dataset), and the library's rules for
+the dataset format constants (T_LmDsFormat vs linmot_st.pvl.dataset), and the library's rules for
 MatIEC (no FOR loop, every file included by st_lib/linmot.st)."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ import re
 from pathlib import Path
 
 from linmot_st import errors
-from linmot_st.commission import dataset as dsf
+from linmot_st.pvl import dataset as dsf
 
 REPO = Path(__file__).resolve().parents[1]
 ST = REPO / "st_lib" / "commission"

@@ -12,7 +12,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 
 from linmot_st.cli import main
-from linmot_st.commission import dataset as dsf
+from linmot_st.pvl import dataset as dsf
 from linmot_st.pvl import Curve, PvlFile, load_pvl
 from linmot_st.pvl.to_st import DEFAULT_TYPE, read_st, to_st
 from test_pvl_properties import pvl_files

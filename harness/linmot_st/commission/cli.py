@@ -66,7 +66,7 @@ def run_command(args: argparse.Namespace) -> int:
     from linmot_st.pvl import PvlError, load_pvl
     from linmot_st.toolchain import CompileError
 
-    from .dataset import DatasetError, from_pvl
+    from linmot_st.pvl.dataset import DatasetError, from_pvl
     from .progress import Progress
     from .project import build_project, prepare
     from .report import Context, Report

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from linmot_st.errors import describe
-from .dataset import Dataset
+from linmot_st.pvl.dataset import Dataset
 from .runner import RunResult
 from .verify import Verification
 

@@ -251,7 +251,7 @@ def _collect(plc, sampler: Sampler) -> None:
 
 def default_timeout_s(dataset, opts: RunOptions) -> float:
     """Generous: 4 ms per expected exchange, plus the drives' slow services (boot, MC start, flash, reset)."""
-    from .dataset import expected_exchanges
+    from linmot_st.pvl.dataset import expected_exchanges
     n = expected_exchanges(dataset, verify=opts.verify, flash=opts.flash)
     return 4e-3 * n + 60.0
 
@@ -270,7 +270,7 @@ def run(pvl, opts: RunOptions, build_result, *, dataset=None, progress=None,
     runs after the program's settings are written and before the first scan (tests: patch the dataset)."""
     from linmot_st.plc import Plc
 
-    from .dataset import from_pvl
+    from linmot_st.pvl.dataset import from_pvl
 
     nodes = opts.nodes()
     dataset = dataset or from_pvl(pvl)

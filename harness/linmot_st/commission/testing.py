@@ -52,7 +52,7 @@ def commission(backend: str = "auto", pvl=None, **kw) -> Outcome:
     """Run the commissioning of `pvl` (default the example) and verify it. Keyword arguments: RunOptions
     fields (timings default "fast", reset default False), and run()'s hooks drive_factory, prepare_bus,
     prepare_plc."""
-    from .dataset import from_pvl
+    from linmot_st.pvl.dataset import from_pvl
     from .report import Context, Report
     from .runner import RunOptions, run
     from .verify import verify

@@ -1,7 +1,7 @@
 """`linmot-st pvl to-st FILE -o OUT.st`: a PVL file as ST data for the PLC (the commissioning dataset).
 
 The output is one TYPE: an `ARRAY[1..n] OF DWORD` whose initial value is the dataset stream of
-`linmot_st.commission.dataset` (format and design: docs/commissioning.md). A PLC program declares a
+`linmot_st.pvl.dataset` (format and design: docs/commissioning.md). A PLC program declares a
 variable of that type and feeds it to FB_LmCommission two words per scan:
 
     VAR Ds : T_PvlData; Com : FB_LmCommission; END_VAR
@@ -19,7 +19,7 @@ import re
 import sys
 from pathlib import Path
 
-from linmot_st.commission import dataset as ds_format
+from . import dataset as ds_format
 
 DEFAULT_TYPE = "T_PvlData"
 _IDENT = re.compile(r"[A-Za-z][A-Za-z0-9]*(_[A-Za-z0-9]+)*")   # no double or trailing underscore (MatIEC)
