@@ -178,10 +178,9 @@ class _FileIndex:
     """One source file's tokens (the compiler's lexer, comments kept), addressable by line and column."""
 
     def __init__(self, text: str):
-        from linmot_st.toolchain.builtin.parser import _parser   # the compiler's cached LALR parser
+        from linmot_st.toolchain.builtin.parser import tokens   # the compiler's own lexer
         self.text = text
-        lexer = _parser()[0]
-        self.tokens = [t for t in lexer.lex(text, dont_ignore=True) if t.type != "WS"]
+        self.tokens = tokens(text)
         self._starts = [(t.line, t.column) for t in self.tokens]
 
     def at(self, pos: A.Pos) -> int:

@@ -66,8 +66,9 @@ def header(lib: Library) -> str:
 
 def _expand(path: Path, root: Path, stack: set[Path]) -> str:
     """The text of `path` with its top-level include pragmas replaced by the files they name."""
-    from linmot_st.toolchain.builtin.loader import INCLUDE, display_name, read_source
+    from linmot_st.toolchain.builtin.loader import display_name, read_source
     from linmot_st.toolchain.builtin.parser import parse
+    from linmot_st.toolchain.sources import INCLUDE_PRAGMA, resolve_include
 
     text = read_source(path)
     items = parse(text, display_name(path, root))   # the compiler's reading: only top-level pragmas count
@@ -77,11 +78,11 @@ def _expand(path: Path, root: Path, stack: set[Path]) -> str:
             line_starts.append(i + 1)
     out, last = [], 0
     for el in items:
-        m = INCLUDE.match(el.text) if isinstance(el, A.Pragma) else None
+        m = INCLUDE_PRAGMA.fullmatch(el.text.strip()) if isinstance(el, A.Pragma) else None
         if not m:
             continue
         start = line_starts[el.pos.line - 1] + el.pos.col - 1
-        target = (root / m.group(1)).resolve()
+        target = resolve_include(m.group(1), root)   # the loader has rejected missing files already
         if target in stack:          # the loader has rejected cycles already; never loop here
             raise ExportError(f"{el.pos}: include cycle through {m.group(1)}")
         out.append(text[last:start])

@@ -96,7 +96,9 @@ def build(path: str | os.PathLike, backend: str = "auto", out: str | os.PathLike
             raise CompileError([f"{src.entry}:1:1: error: backend matiec: iec2c not found "
                                 f"(set IEC2C or MATIEC_HOME, or put iec2c on PATH)"], chosen)
         backend_version = matiec.version(tool)
-        generator = [_TOOLCHAIN_DIR / "matiec.py", _TOOLCHAIN_DIR / "st_decls.py"]
+        # st_decls reads declarations with the builtin parser: its files shape the MatIEC manifest too
+        generator = [_TOOLCHAIN_DIR / "matiec.py", _TOOLCHAIN_DIR / "st_decls.py",
+                     *sorted((_TOOLCHAIN_DIR / "builtin").glob("*.py")), _TOOLCHAIN_DIR / "builtin" / "st.lark"]
         flags = list(matiec.flags(tool.iec2c)) + _matiec_unit_flags()
     else:
         tool = None

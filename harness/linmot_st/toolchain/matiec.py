@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from . import st_decls
+from .builtin.errors import BuiltinCompileError
 from .sources import Sources
 
 NAME = "matiec"
@@ -388,7 +389,13 @@ def describe(out_dir: Path, generated: list[Path], sources: Sources, m: Matiec,
         if path.is_file():
             parse_header(path.read_text(), ct, header)
     parse_header(read_with_local_includes(out_dir / "POUS.h"), ct)
-    decls = st_decls.scan_paths(sources.files, sources.root)
+    try:
+        decls = st_decls.scan_paths(sources.files, sources.root)
+    except BuiltinCompileError as exc:   # iec2c took it, but the declarations cannot be read (an IL body, say)
+        diags = [*map(str, exc.diagnostics),
+                 "note: the MatIEC backend reads array bounds and POU positions with the builtin parser, "
+                 "which does not parse this; IL and SFC bodies are not supported"]
+        raise MatiecError("\n".join(diags), diags) from None
     roots, tick_ns = parse_roots(out_dir, generated, ct)
     builder = ManifestBuilder(ct, decls, {r.ctype for r in roots if r.how == "PROGRAM"})
     mroots = []

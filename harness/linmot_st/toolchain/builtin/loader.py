@@ -7,14 +7,13 @@ nests up to 16 deep like MatIEC's, and keeps its own file name and line numbers 
 
 from __future__ import annotations
 
-import re
 from pathlib import Path
 
+from ..sources import INCLUDE_PRAGMA, resolve_include
 from . import ast as A
 from .errors import BuiltinCompileError, Diagnostic
 from .parser import parse
 
-INCLUDE = re.compile(r'\{\s*#include\s+"([^"]*)"\s*\}$')
 MAX_DEPTH = 16
 
 
@@ -57,10 +56,10 @@ def load(entry: Path, root: Path) -> tuple[list[A.Node], list[Path], list[str]]:
             return
         for el in items:
             if isinstance(el, A.Pragma):
-                m = INCLUDE.match(el.text)
+                m = INCLUDE_PRAGMA.fullmatch(el.text.strip())
                 if m:
-                    target = (root / m.group(1))
-                    if not target.is_file():
+                    target = resolve_include(m.group(1), root)
+                    if target is None:
                         diags.append(Diagnostic(el.pos.file, el.pos.line, el.pos.col,
                                                 f'cannot find included file "{m.group(1)}" under {root}'))
                         continue

@@ -604,6 +604,12 @@ def _parser() -> tuple[lark.Lark, _Builder]:
     return parser, builder
 
 
+def tokens(text: str) -> list[lark.Token]:
+    """The lexer's tokens of `text` with comments kept and white space dropped: what tools that rewrite
+    ST without changing it (the exporter) need to find comments and exact source spans."""
+    return [t for t in _parser()[0].lex(text, dont_ignore=True) if t.type != "WS"]
+
+
 def parse(text: str, file: str) -> list[A.Node]:
     """Parse one file's text; `file` is the name diagnostics use. Raises BuiltinCompileError."""
     parser, builder = _parser()
