@@ -8,7 +8,8 @@ import pytest
 
 from linmot_st.commission.project import INSTANCE, MAILBOX
 from linmot_st.commission.testing import project_build, use_local_matiec
-from test_stlib_plcopen import assert_exclusive, outputs, requests, run_recording
+from test_stlib_plcopen import (assert_exclusive, check_rising_edge_after_the_pulse, check_toggled_execute, outputs,
+                                requests, run_recording)
 
 use_local_matiec()
 
@@ -168,6 +169,16 @@ def test_error_is_a_one_scan_pulse_when_execute_fell_before():
     assert all(s[1] for s in states[:first])
     assert states[first + 1:] == [(False, False, False, False, 0)] * (len(states) - first - 1)
     assert (fb["FAILPHASE"], fb["FAILITEM"]) == ("LM_COM_CHECK", 1)   # diagnostics stay until the next start
+
+
+def test_execute_rising_in_the_scan_after_the_pulse_starts_a_new_run():
+    b = ComBench()
+    check_rising_edge_after_the_pulse(b, b.fb("COM"), first_request_scans=3)   # START: 2 scans, no frame
+
+
+def test_execute_toggled_every_scan_gives_one_run_per_edge_after_completion():
+    b = ComBench()
+    check_toggled_execute(b, b.fb("COM"), runs=2, first_request_scans=3)
 
 
 @pytest.mark.parametrize("at_scan", [2, 40, 300])

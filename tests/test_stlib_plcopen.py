@@ -242,3 +242,85 @@ def test_abort(spec):
     b.step(1)
     assert outputs(fb) == (False, False, False, False, 0)
     assert b.fb("RD").run(UPID=0x1005).done                    # the channel is free again
+
+
+
+def finish_pulse(b: Bench, fb: Fb, max_scans: int = 5000) -> tuple:
+    """Execute for one scan, then low until the FB shows its one-scan Done/Error pulse; returns that state."""
+    fb["EXECUTE"] = True
+    for _ in range(max_scans):
+        b.step(1)
+        fb["EXECUTE"] = False
+        s = outputs(fb)
+        if s[0] or s[2]:
+            return s
+    raise AssertionError(f"{fb.name} did not finish")
+
+
+def request_starts(b: Bench, t0: int) -> list[int]:
+    return [e.start_ns for e in b.sdo_trace(since_ns=t0) if e.frame.can_id == 0x601]
+
+
+def check_rising_edge_after_the_pulse(b: Bench, fb: Fb, first_request_scans: int = 1) -> None:
+    """Execute rises in the scan right after the one-scan Done pulse: a new run (Busy in that scan, the old
+    Done gone), its first request on the bus within `first_request_scans` scans, and it finishes."""
+    assert finish_pulse(b, fb)[0]
+    t0 = b.plc.time_ns
+    fb["EXECUTE"] = True                                       # the very next scan
+    b.step(1)
+    assert outputs(fb) == (False, True, False, False, 0)
+    states = run_recording(b, fb, execute_scans=None)
+    assert states[-1][0] or states[-1][2]
+    starts = request_starts(b, t0)
+    assert starts and starts[0] < t0 + first_request_scans * b.plc.tick_ns
+
+
+def check_toggled_execute(b: Bench, fb: Fb, runs: int = 3, first_request_scans: int = 1) -> None:
+    """Execute TRUE, FALSE, TRUE, ...: every rising edge that finds the FB not Busy starts a run, edges while
+    Busy are ignored, every run ends with one Done/Error, and each run's first request reaches the bus."""
+    t0 = b.plc.time_ns
+    prev = outputs(fb)
+    idle_edges = started = ends = 0
+    run_starts = []
+    for k in range(20_000):
+        execute = k % 2 == 0
+        fb["EXECUTE"] = execute
+        t = b.plc.time_ns
+        b.step(1)
+        s = outputs(fb)
+        assert_exclusive(s)
+        if execute and not prev[1]:
+            idle_edges += 1
+        if s[1] and not prev[1]:
+            started += 1
+            run_starts.append(t)
+            assert execute, "a run starts only at a rising edge"
+        if (s[0] or s[2]) and prev[1]:
+            ends += 1
+        prev = s
+        if ends >= runs and not execute:
+            break
+    assert started == idle_edges == ends >= runs
+    b.step(first_request_scans)
+    starts = request_starts(b, t0)
+    window = first_request_scans * b.plc.tick_ns
+    assert all(any(t <= r < t + window for r in starts) for t in run_starts)
+
+
+@pytest.mark.parametrize("spec", SPECS, ids=IDS)
+def test_execute_rising_in_the_scan_after_the_pulse_starts_a_new_run(spec):
+    """PLCopen: a rising edge of Execute after the FB finished starts a new command, also when it comes in
+    the scan right after the one-scan Done pulse (not swallowed, the old Done not shown for it).
+    CA / CAF add the same curve again: the drive answers D4h (exists), an Error end of the new run."""
+    b = bench(spec)
+    fb = b.fb(spec.name)
+    fb.set(**spec.inputs)
+    check_rising_edge_after_the_pulse(b, fb)
+
+
+@pytest.mark.parametrize("spec", SPECS, ids=IDS)
+def test_execute_toggled_every_scan_gives_one_run_per_edge_after_completion(spec):
+    b = bench(spec)
+    fb = b.fb(spec.name)
+    fb.set(**spec.inputs)
+    check_toggled_execute(b, fb)
