@@ -201,3 +201,22 @@ def test_abort(at_scan):
     assert outputs(fb) == (False, False, False, False, 0)
     states = run_recording(b, fb, execute_scans=None, max_scans=5000)   # the channel is free again
     assert states[-1][0]
+
+
+@pytest.mark.parametrize("lost", [0x35, 0x40, 0x42], ids=["stop", "save", "poll"])
+def test_flash_phase_lost_answer_starts_mc_again(lost):
+    """As FB_LmFlashSave: a missing answer in the FLASH phase (SdoTimeout) once the MC may be stopped still
+    sends 36h before the failure is reported, and the drive's MC runs again."""
+    b = ComBench()
+    b["CH1.SDOTIMEOUT"] = 30 * MS
+    b.bus.drop(lambda f: f.can_id == 0x581 and f.data[1:4] == bytes([0x00, 0x20, lost]), count=1)
+    fb = b.fb("COM")
+    fb.set(FLASH=True)
+    t0 = b.plc.time_ns
+    states = run_recording(b, fb, execute_scans=None, max_scans=20_000)
+    assert states[-1][2] and fb["ERRORID"] == 0x0301                  # SdoTimeout
+    assert (fb["FAILPHASE"], fb["FAILITEM"]) == ("LM_COM_FLASH", lost)
+    subs = [e.frame.data[3] for e in b.sdo_trace(since_ns=t0)
+            if e.frame.can_id == 0x601 and e.frame.data[1:3] == b"\x00\x20" and e.frame.data[3] in (0x35, 0x36, 0x40, 0x42)]
+    assert subs[0] == 0x35 and subs[-2:] == [lost, 0x36] and subs.count(0x36) == 1
+    assert b.drive.mc_phase == "running"

@@ -8,6 +8,8 @@ import json
 import sys
 from pathlib import Path
 
+import pytest
+
 sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
 from stbench import MAILBOX, VECTORS, Bench  # noqa: E402
 
@@ -165,6 +167,23 @@ def test_flash_save_abort_after_stop_starts_mc_again_and_keeps_the_abort_code():
     r = b.fb("FS").run(CURVES=True)
     assert r.error and r.error_id == E["SdoAbort"] and r["ABORTCODE"] == 0x08000022
     assert sent_subs(b, t0) == [0x35, 0x40, 0x36]                 # MC start attempted before reporting
+
+
+@pytest.mark.parametrize("lost", [0x35, 0x40, 0x42], ids=["stop", "save", "poll"])
+def test_flash_save_lost_answer_starts_mc_again(lost):
+    """A missing answer (SdoTimeout) once the MC may be stopped: the FB still starts the MC (36h) before it
+    reports the timeout; the drive's MC runs again. (A lost answer to 35h: the drive may have stopped.)"""
+    b = Bench(nodes=1)
+    assert add_seed(b).done
+    b["CH1.SDOTIMEOUT"] = 30 * MS
+    b.bus.drop(answer_to(lost), count=1)
+    t0 = b.plc.time_ns
+    r = b.fb("FS").run(CURVES=True, POLLINTERVAL=0)
+    assert r.error and r.error_id == E["SdoTimeout"] and r["ABORTCODE"] == 0
+    subs = sent_subs(b, t0)
+    assert subs[0] == 0x35 and subs[-1] == 0x36 and subs.count(0x36) == 1
+    assert lost in subs and subs.index(lost) == len(subs) - 2        # the start follows the unanswered request
+    assert b.drive.mc_phase == "running"
 
 
 def test_mc_stop_refused():
