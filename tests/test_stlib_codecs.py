@@ -17,7 +17,9 @@ from linmot_st.errors import BY_NAME  # noqa: E402
 
 E = {name: e.value for name, e in BY_NAME.items()}
 STRINGLETS = json.loads((VECTORS / "stringlets.json").read_text())["strings"]
-CURVES = json.loads((VECTORS / "curve_info.json").read_text())["curves"]
+CURVE_VECTORS = json.loads((VECTORS / "curve_info.json").read_text())
+CURVES = CURVE_VECTORS["curves"]
+LAYOUT = CURVE_VECTORS["layout"]
 SDO_VECTORS = VECTORS / "sdo_frames.json"
 
 FIELD_OF = {   # curve_info.json field -> T_LmCurveHeader member
@@ -254,11 +256,12 @@ def test_sdo_answer_classification(c):
         assert c["MATCHES"]
         if value is not None:
             assert c["VALUE"] == value, frame
+        if kind == "LM_SDO_ABORTED":
+            assert c["ABORTCODE"] == value                          # F_LmSdoAbortCode
     c.run(32, FRAME=list(bytes.fromhex("60012051 00000400")), INDEX=0x2001, SUBIDX=0x50)
     assert not c["MATCHES"]
 
 
-@pytest.mark.skipif(not SDO_VECTORS.exists(), reason="tests/vectors/sdo_frames.json not there yet")
 def test_sdo_frames_vectors(c):
     """Every request of the emulator's vectors that the library builds (23h download of 4 bytes, 40h
     upload) is built byte for byte; every response is classified and decoded as the bytes say."""
@@ -292,7 +295,7 @@ def test_sdo_frames_vectors(c):
                 assert c["KIND"] == "LM_SDO_DOWNLOADED"
             elif cs == 0x80:
                 assert c["KIND"] == "LM_SDO_ABORTED"
-                assert c["VALUE"] == struct.unpack_from("<I", ans, 4)[0]
+                assert c["VALUE"] == c["ABORTCODE"] == struct.unpack_from("<I", ans, 4)[0]
             elif cs & 0xF2 == 0x42:
                 assert c["KIND"] == "LM_SDO_UPLOADED"
                 n = 4 - ((cs >> 2) & 3) if cs & 1 else 4
@@ -313,6 +316,86 @@ def test_little_endian_get_put(c):
     assert c["FRAME"] == [0, 0, 0, 0, 0, 0, 0xEF, 0xBE]
     c.run(35, FRAME=[0] * 8, OFS=4, U32=0x01312D00)
     assert c["FRAME"] == [0, 0, 0, 0, 0x00, 0x2D, 0x31, 0x01]
+
+
+def test_byte_helpers_on_the_curve_vectors_words(c):
+    """F_LmU16 / F_LmU32 (bytes -> value, least significant first) and F_LmByteOf (value -> byte n) on the
+    info-block words of the shared curve vectors (word k = bytes 4k..4k+3, little endian)."""
+    words = [int(w, 16) for vec in CURVES for w in vec["info_words"]] + [0, 0xFFFFFFFF, 0x80000001]
+    for w in words:
+        raw = w.to_bytes(4, "little")
+        for n in range(4):
+            c.run(36, B0=raw[0], B1=raw[1], B2=raw[2], B3=raw[3], VALUE=w, BYTEN=n)
+            assert c["BYTEOUT"] == raw[n], (hex(w), n)
+        assert c["U32"] == w and c["U16"] == w & 0xFFFF, hex(w)
+
+
+@pytest.mark.parametrize("vec", CURVES, ids=[v["fields"]["name"] for v in CURVES])
+def test_info_block_get_and_put_at_the_layout_offsets(c, vec):
+    """F_LmInfoGetU16/U32 read every numeric field of the shared vectors' info blocks at its offset of the
+    vectors' layout (seeds table 6); F_LmInfoPutU16/U32 of the same fields rebuild the block byte for byte."""
+    block = list(bytes.fromhex(vec["info_block"]))
+    f = vec["fields"]
+    fields = []                                                    # (offset, bits, value)
+    for key, ofs, typ in LAYOUT:
+        if typ == "UInt16":
+            fields.append((ofs, 16, f[key]))
+        elif typ == "UInt32":
+            fields.append((ofs, 32, f[key]))
+        elif typ == "7 x UInt32":
+            fields += [(ofs + 4 * i, 32, v) for i, v in enumerate(f[key])]
+        else:
+            assert typ == "String22" and key == "name"
+    assert len(fields) == 16                                        # 9 fields + 7 wizard parameters
+    for ofs, bits, value in fields:
+        c.run(37, INFO=block, OFS=ofs)
+        assert c["U16" if bits == 16 else "U32"] == value, ofs
+    c["INFO"] = [0] * 8 + name_bytes(f["name"], 22) + [0] * 40
+    for ofs, bits, value in fields:
+        if bits == 16:
+            c.run(38, OFS=ofs, U16=value)
+        else:
+            c.run(39, OFS=ofs, U32=value)
+    assert c["INFO"] == block
+
+
+def test_ct_block_get_and_put_u16():
+    """F_LmCtGetU16 / F_LmCtPutU16 against the emulator's entry layout (seeds table 10: version A701h,
+    link, header, parameters, name): every 16-bit word read back at every offset, and rebuilt by puts."""
+    from linmot_st.emulator import build_entry
+    from linmot_st.plc import Plc
+    c = Codecs.__new__(Codecs)
+    c.plc = Plc(bench_build())
+    block = build_entry(0x0901, bytes(range(0x80, 0xA0)), name="GoTo 50mm", link=7)
+    for ofs in range(0, 63):
+        c.run(42, CT=list(block), OFS=ofs)
+        assert c["U16"] == int.from_bytes(block[ofs:ofs + 2], "little"), ofs
+    c.run(42, OFS=0)
+    assert c["U16"] == 0xA701
+    c["CT"] = [0xEE] * 64
+    for ofs in range(0, 64, 2):
+        c.run(43, OFS=ofs, U16=int.from_bytes(block[ofs:ofs + 2], "little"))
+    assert bytes(c["CT"]) == block
+
+
+# ---------------------------------------------------------------- the mailbox
+
+def test_box_append_and_nmt_start(c):
+    """F_LmBoxAppend appends after the frames already queued and refuses (TxLost + 1) a 33rd frame;
+    F_LmNmtStart appends NMT Start for a node: 000h, 2 bytes, 01h node."""
+    c["BOX"] = {"RXCOUNT": 0, "TXCOUNT": 0, "TXLOST": 0}
+    c.run(45, NODEID=42)
+    assert c["OK"] and c["BOX"]["TXCOUNT"] == 1
+    assert c["BOX"]["TX"][0] == {"ID": 0, "DLC": 2, "RTR": False, "DATA": [0x01, 42, 0, 0, 0, 0, 0, 0]}
+    frame = list(bytes.fromhex("4000201000000000"))
+    for n in range(2, 33):
+        c.run(44, INDEX=0x600 + n, DLC=8, FRAME=frame)
+        assert c["OK"] and c["BOX"]["TXCOUNT"] == n
+    assert c["BOX"]["TX"][31] == {"ID": 0x600 + 32, "DLC": 8, "RTR": False, "DATA": frame}
+    c.run(44, INDEX=0x601, DLC=8, FRAME=frame)
+    assert not c["OK"] and (c["BOX"]["TXCOUNT"], c["BOX"]["TXLOST"]) == (32, 1)
+    c.run(45, NODEID=1)
+    assert not c["OK"] and (c["BOX"]["TXCOUNT"], c["BOX"]["TXLOST"]) == (32, 2)
 
 
 # ---------------------------------------------------------------- firmware layers
