@@ -62,7 +62,7 @@ def test_presence_delete_and_delete_all(b):
     assert b.fb("CTDEL").run(ENTRY=31).done
     assert 31 not in b.drive.ct.ram
     assert b.fb("CTPRES").run()["COUNT"] == 3
-    assert b.fb("CTRD").run(ENTRY=31).error_id == E["ResultCurveState"]     # D4h: entry not present
+    assert b.fb("CTRD").run(ENTRY=31).error_id == E["ResultObjectState"]     # D4h: entry not present
     assert b.fb("CTDELALL").run().done
     assert b.drive.ct.ram == {}
     assert b.fb("CTPRES").run()["LIST"] == [0xFFFFFFFF] * 8
@@ -94,3 +94,20 @@ def test_save_to_flash_with_curves_in_one_run(b):
     assert b.fb("CTDELALL").run().done
     assert b.fb("RST").run().done
     assert b.fb("CTRD").run(ENTRY=9)["NAME"] == "kept"
+
+
+def test_aborted_write_leaves_the_entry_absent_until_written_again(b):
+    assert b.fb("CTWRF").run(ENTRY=3, HEADER=0x0103, NAME="old").done
+    block = build_entry(0x0901, PARS, name="new")
+    wr = b.fb("CTWR")
+    wr.start(ENTRY=3, BLOCK=list(block))
+    b.step(6)
+    wr["ABORT"] = True
+    b.step(1)
+    assert wr["COMMANDABORTED"]
+    wr.set(EXECUTE=False, ABORT=False)
+    b.step(1)
+    assert 3 not in b.drive.ct.ram
+    assert b.fb("CTRD").run(ENTRY=3).error_id == E["ResultObjectState"]      # D4h: not present
+    assert wr.run(ENTRY=3, BLOCK=list(block)).done
+    assert b.drive.ct.ram[3] == block

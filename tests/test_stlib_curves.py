@@ -108,13 +108,13 @@ def test_drive_refuses_existing_and_absent_curves(b):
     assert add(b, 23, info, setpoints).done
     t0 = b.plc.time_ns
     r = add(b, 23, info, setpoints)
-    assert r.error and r.error_id == E["ResultCurveState"]            # D4h: curve already exists
+    assert r.error and r.error_id == E["ResultObjectState"]            # D4h: curve already exists
     assert exchanges(b.sdo_trace(since_ns=t0)) == 1
     r = b.fb("CG").run(CURVEID=24)
-    assert r.error and r.error_id == E["ResultCurveState"]            # D4h: not present
+    assert r.error and r.error_id == E["ResultObjectState"]            # D4h: not present
     assert b.fb("CDA").run().done
     assert b.drive.curves.ram == {}
-    assert b.fb("CG").run(CURVEID=23).error_id == E["ResultCurveState"]
+    assert b.fb("CG").run(CURVEID=23).error_id == E["ResultObjectState"]
 
 
 def info_with(**changes) -> list[int]:
@@ -189,3 +189,23 @@ def test_flash_save_refused_while_mc_runs(b):
 def test_flash_save_needs_a_selection(b):
     r = b.fb("FS").run(CURVES=False, COMMANDTABLE=False)
     assert r.error and r.error_id == E["NothingSelected"] and r.scans == 1
+
+
+def test_aborted_download_blocks_the_curve_id_until_delete_all(b):
+    """An aborted download leaves the curve open on the drive: the ID answers D4h (ResultObjectState) to a new
+    add, and is not present for a get, until "delete all curves" (41h); then the download works again."""
+    info, setpoints = info_of(SEED), SEED["setpoints"]
+    b.set_setpoints(setpoints)
+    ca = b.fb("CA")
+    ca.start(CURVEID=23, INFO=info, DATASIZE=40)
+    b.step(5)
+    ca["ABORT"] = True
+    b.step(1)
+    assert ca["COMMANDABORTED"]
+    ca.set(EXECUTE=False, ABORT=False)
+    b.step(1)
+    assert add(b, 23, info, setpoints).error_id == E["ResultObjectState"]
+    assert b.fb("CG").run(CURVEID=23).error_id == E["ResultObjectState"]
+    assert b.fb("CDA").run().done                                       # the recovery: delete all ...
+    assert add(b, 23, info, setpoints).done                              # ... and download again
+    assert b.drive.curves.ram[23].setpoints == setpoints

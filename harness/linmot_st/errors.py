@@ -95,7 +95,9 @@ ERRORS: tuple[ErrorDef, ...] = (
     ErrorDef("ResultListEnd", RESULT_BASE + 0xC6, "result C6h: end of UPID list"),
     ErrorDef("ResultBlockFinished", RESULT_BASE + 0xD0, "result D0h: block already finished"),
     ErrorDef("ResultBlockSize", RESULT_BASE + 0xD1, "result D1h: invalid block size"),
-    ErrorDef("ResultCurveState", RESULT_BASE + 0xD4, "result D4h: curve already exists (add) / not present (get) / invalid entry"),
+    ErrorDef("ResultObjectState", RESULT_BASE + 0xD4,
+             "result D4h: the curve or command-table entry is in the wrong state for the request: the curve "
+             "already exists or is being written (add), the curve or entry is not present (get), invalid entry"),
     ErrorDef("ResultMcNotStopped", RESULT_BASE + 0xD7, "result D7h: MC software not stopped"),
     # 05xx compatibility
     ErrorDef("TreeIdMismatch", 0x0501, "firmware layer: tree ID of the source differs from the drive's"),
