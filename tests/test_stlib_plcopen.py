@@ -76,7 +76,7 @@ SPECS = [
     Spec("MSA", {}, fail=dict(TIMEOUT=20 * MS)),
     Spec("RST", {}, fail=dict(BOOTTIMEOUT=40 * MS)),
     Spec("SDO", dict(INDEX=0x1018, SUBINDEX=1, WRITE=False), dict(SUBINDEX=2), dict(INDEX=0)),
-    Spec("CMD", dict(SUBINDEX=0x41, E1100ONLY=True), dict(SUBINDEX=0x81), dict(INPUTERROR=0x0101)),
+    Spec("CMD", dict(SUBINDEX=0x41, E1100ONLY=True), dict(SUBINDEX=0x81), dict(WRAPPERERROR=0x0101)),
 ]
 IDS = [s.name for s in SPECS]
 
