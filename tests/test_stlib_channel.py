@@ -326,3 +326,22 @@ def test_b1100_parameter_access_through_c0h():
     lc = b.fb("LC").run(LAYER=1, CHECK=True, SOURCE={"TREEID": 1, "MAINVERSION": 3, "SUBVERSION": 0})
     assert lc.done and lc.scans == 7                                     # 3 x (select + read), B1100 UPIDs
     assert lc["DRIVE"] == {"TREEID": 1, "MAINVERSION": 3, "SUBVERSION": 1} and lc["COMPATIBLE"]
+
+
+def test_reset_fb_no_longer_called_does_not_disable_heartbeat_monitoring():
+    """FB_LmReset sets Axis.Booting (heartbeat loss tolerated) at its turn; when it is no longer called, the
+    channel evicts it and ends that grace too, so a lost node is detected again."""
+    b = Bench(nodes=1)
+    b.fb("RST").start()
+    b.step(1)                                   # its turn: 0Bh sent, the reboot expected
+    assert b["AX1.BOOTING"]
+    b["CALLRST"] = False
+    b.step(4)                                   # HolderScans (3) missed scans: evicted
+    assert b["AX1.EVICTIONS"] == 1 and not b["AX1.BOOTING"]
+    b["CH1.HEARTBEATTIMEOUT"] = 50 * MS
+    b.bus.remove_node("drive1", b.plc.time_ns)
+    b.step(60)
+    assert not b["CH1.READY"] and b["CH1.ERRORID"] == E["NodeLost"]
+    b["CALLRST"] = True
+    b.step(1)
+    assert b.fb("RST")["ERROR"] and b.fb("RST")["ERRORID"] in (E["Evicted"], E["NodeLost"])
