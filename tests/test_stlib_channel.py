@@ -320,9 +320,12 @@ def test_b1100_parameter_access_through_c0h():
     assert b.fb("SRD").run(UPID=0x7078, COUNT=3)["TEXT"] == "X Axis Left"
     for fb, inputs in [("RD", dict(UPID=1, MEM="LM_MIN")), ("CG", dict(CURVEID=1)), ("CTRD", dict(ENTRY=1)),
                        ("DEF", dict(LAYER=1)), ("UL", dict(STARTUPID=0)), ("CTPRES", {}), ("FS", dict(CURVES=True))]:
+        before = len(fake.requests)
         r = b.fb(fb).run(**inputs)
         assert r.error and r.scans == 1, fb
         assert r.error_id in (E["NotSupported"], E["InvalidMem"]), fb
+        b.step(2)
+        assert len(fake.requests) == before, fb                         # refused before any frame
     lc = b.fb("LC").run(LAYER=1, CHECK=True, SOURCE={"TREEID": 1, "MAINVERSION": 3, "SUBVERSION": 0})
     assert lc.done and lc.scans == 7                                     # 3 x (select + read), B1100 UPIDs
     assert lc["DRIVE"] == {"TREEID": 1, "MAINVERSION": 3, "SUBVERSION": 1} and lc["COMPATIBLE"]

@@ -86,6 +86,18 @@ def test_invalid_inputs_fail_before_any_frame(b, fb, inputs, error):
     assert b.sdo_trace(since_ns=t0) == []
 
 
+def test_save_command_table_only(b):
+    assert b.fb("CTWRF").run(ENTRY=9, HEADER=0x0103, NAME="kept").done
+    t0 = b.plc.time_ns
+    r = b.fb("FS").run(CURVES=False, COMMANDTABLE=True, POLLINTERVAL=0)
+    assert r.done, r
+    subs = [e.frame.data[3] for e in b.sdo_trace(since_ns=t0) if e.frame.can_id == 0x601]
+    assert subs[:2] == [0x35, 0x80] and set(subs[2:-1]) == {0x80} and subs[-1] == 0x36   # no 40h / 42h
+    assert r["POLLS"] == len(subs) - 3 >= 1
+    assert b.drive.ct.flash == {9: b.drive.ct.ram[9]} and b.drive.curves.flash == {}
+    assert b.drive.mc_phase == "running"
+
+
 def test_save_to_flash_with_curves_in_one_run(b):
     assert b.fb("CTWRF").run(ENTRY=9, HEADER=0x0103, NAME="kept").done
     r = b.fb("FS").run(CURVES=True, COMMANDTABLE=True, POLLINTERVAL=0)
