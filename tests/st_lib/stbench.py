@@ -5,7 +5,8 @@ with emulated E1100 drives, and a handle per FB instance that drives its PLCopen
     r = b.fb("RD").run(UPID=0x1194)    # Execute, step until Done/Error, Execute off
     r.done, r.error, r.error_id, r.scans, r["VALUE"]
 
-One build serves every test (cached by content); each Bench loads its own PLC instance. The suite runs on
+One build serves every test (cached by content); each Bench loads its own PLC instance. Bench(task_ms=3)
+uses a variant of the testbench with another task interval (one more build, under build/st_lib_variants). The suite runs on
 MatIEC when iec2c is found, else on the builtin compiler; STLIB_BACKEND=builtin|matiec forces one.
 """
 
@@ -39,8 +40,25 @@ def available_backends() -> list[str]:
     return out
 
 
-def bench_build(backend: str = "auto"):
-    """The testbench, built once per backend per session (skips the test when it cannot be built)."""
+TASK_LINE = "TASK Main(INTERVAL := T#1ms, PRIORITY := 0);"
+VARIANTS = REPO / "build" / "st_lib_variants"     # inside the repository: st_lib/ is its include root
+
+
+def testbench_with_task(task_ms: int) -> Path:
+    """The testbench with another task interval: its CONFIGURATION rewritten into a file under build/."""
+    text = TESTBENCH.read_text(encoding="latin-1")
+    assert text.count(TASK_LINE) == 1, "the testbench's task line changed: update TASK_LINE"
+    VARIANTS.mkdir(parents=True, exist_ok=True)
+    path = VARIANTS / f"testbench_task{task_ms}ms.st"
+    tmp = path.with_suffix(f".{os.getpid()}.tmp")
+    tmp.write_text(text.replace(TASK_LINE, TASK_LINE.replace("T#1ms", f"T#{task_ms}ms")), encoding="latin-1")
+    os.replace(tmp, path)                          # atomic: parallel test workers may write it at once
+    return path
+
+
+def bench_build(backend: str = "auto", task_ms: int = 1):
+    """The testbench, built once per backend (and task interval) per session (skips the test when it cannot
+    be built)."""
     from linmot_st import toolchain
     if backend == "auto":
         backend = os.environ.get("STLIB_BACKEND", "auto")      # run the suite on one backend: matiec | builtin
@@ -49,9 +67,11 @@ def bench_build(backend: str = "auto"):
         if not backends:
             pytest.skip("no ST backend: MatIEC's iec2c not found and the builtin compiler is not importable")
         backend = backends[0]
-    if backend not in _builds:
-        _builds[backend] = toolchain.build(str(TESTBENCH), backend=backend)
-    return _builds[backend]
+    key = backend if task_ms == 1 else f"{backend}/{task_ms}ms"
+    if key not in _builds:
+        source = TESTBENCH if task_ms == 1 else testbench_with_task(task_ms)
+        _builds[key] = toolchain.build(str(source), backend=backend)
+    return _builds[key]
 
 
 @dataclass
@@ -135,13 +155,13 @@ class Bench:
     """The testbench PLC with `nodes` emulated E1100 drives (node IDs 1..nodes) on one simulated bus."""
 
     def __init__(self, nodes: int = 1, *, bitrate: int = 500_000, timings: Any = None, backend: str = "auto",
-                 enable: bool = True, drive_kwargs: dict | None = None):
+                 enable: bool = True, drive_kwargs: dict | None = None, task_ms: int = 1):
         from linmot_st.bus import SimBus
         from linmot_st.cosim import CoSim
         from linmot_st.emulator import DriveTimings, E1100Drive
         from linmot_st.plc import Plc
 
-        self.build = bench_build(backend)
+        self.build = bench_build(backend, task_ms)
         self.plc = Plc(self.build)
         self.bus = SimBus(bitrate)
         self.drives = {}
