@@ -10,6 +10,7 @@ import os
 
 import pytest
 
+from linmot_st.bus.bits import bus_bits, unstuffed_bus_bits
 from linmot_st.cli import main
 from linmot_st.pvl.dataset import INFO_WORDS
 from linmot_st.commission.testing import EXAMPLE, commission, example, use_local_matiec
@@ -22,6 +23,16 @@ PVL = example()
 CURVE_EXCHANGES = 1 + sum(1 + INFO_WORDS + len(c.setpoints) for c in PVL.curves)   # 41h, then 50h, 54h x 18, 53h x N
 EXPECTED = {"check": 3 * 2, "params": 30, "curves": CURVE_EXCHANGES, "ct": 1 + 33 * 3,
             "verify": 30 + (CURVE_EXCHANGES - 1) + 33 * 3}
+
+
+TRANSFER = sum(EXPECTED.values())                    # one axis' exchanges in CHECK, PARAMS, CURVES, CT, VERIFY
+FLASH_NECESSARY = 1 + 2 + 2 + 1                      # stop MC, save and one poll per store (curves, CT), start MC
+FRAME_BITS = unstuffed_bus_bits(8)                   # 111
+
+
+def bound_ms(exchanges: int, bitrate: int = 500_000) -> float:
+    """The bus-time lower bound: exchanges x 2 frames x 111 bits / bit rate."""
+    return exchanges * 2 * FRAME_BITS / bitrate * 1e3
 
 
 def requests(result, node: int) -> list:
@@ -99,6 +110,51 @@ def test_other_node_ids_and_live_ram():
     assert {e.frame.can_id for e in o.result.trace} >= {0x605, 0x611, 0x585, 0x591}
 
 
+def test_report_figures_agree_with_the_trace():
+    """Every figure of the report recomputed from its definition: the bounds from the exchange counts, the
+    bus's busy time from the frames' bit lengths, the plotted read-back from the 62h answers on the bus."""
+    from linmot_st.commission.plots import read_back_from_trace
+
+    o = commission(axes=2)
+    f, r = o.report.figures, o.result
+    assert FRAME_BITS == 111 and f["bus"]["frame_bits"] == FRAME_BITS
+    for a in f["axes"]:
+        for p in a["phases"]:
+            assert p["lower_bound_ms"] == pytest.approx(bound_ms(p["exchanges"]), rel=1e-12), p["phase"]
+            if p["exchanges"] and p["phase"] not in ("start", "flash", "reset"):
+                assert p["ratio"] == pytest.approx(p["time_ms"] / p["lower_bound_ms"])
+        assert a["transfer"]["exchanges"] == TRANSFER
+        assert a["transfer"]["lower_bound_ms"] == pytest.approx(bound_ms(TRANSFER), rel=1e-12)
+    # the run: the bound counts the necessary exchanges of both axes; the actual ones stand beside it
+    assert f["run"]["necessary_exchanges"] == 2 * (TRANSFER + FLASH_NECESSARY)      # no reset in this run
+    assert f["run"]["exchanges"] == sum(a.exchanges for a in r.axes) > f["run"]["necessary_exchanges"]  # polls
+    assert f["bus"]["lower_bound_ms"] == pytest.approx(bound_ms(2 * (TRANSFER + FLASH_NECESSARY)), rel=1e-12)
+    assert f["bus"]["lower_bound_actual_ms"] == pytest.approx(bound_ms(f["run"]["exchanges"]), rel=1e-12)
+    assert f["bus"]["ratio"] == pytest.approx(f["run"]["time_ms"] / f["bus"]["lower_bound_ms"])
+    # transfer phases of all axes: one bus, two drives writing at once
+    tr = f["transfer"]
+    assert tr["exchanges"] == tr["necessary_exchanges"] == 2 * TRANSFER
+    assert tr["lower_bound_ms"] == pytest.approx(bound_ms(2 * TRANSFER), rel=1e-12)
+    assert tr["ratio"] == pytest.approx(tr["time_ms"] / tr["lower_bound_ms"]) and 1.0 < tr["ratio"] < 1.2
+    assert tr["load"] > 0.9                                          # the bus is the limit for two axes
+    # the bus's busy time is the sum of the frames' bit lengths (stuff bits and IFS included) in the window
+    t0, t1 = r.t_start_ns, r.t_end_ns
+    window = [e for e in r.trace if t0 <= e.start_ns < t1 and e.status != "error"]
+    assert f["bus"]["frames"] == len(window) < f["bus"]["frames_in_trace"] == len(r.trace)
+    assert r.stats.busy_ns == sum(bus_bits(e.frame) for e in window) * r.bit_ns
+    assert f["bus"]["busy_ms"] == pytest.approx(sum(bus_bits(e.frame) for e in window) * 2e-3, rel=1e-12)
+    # what the plots show as read back is what the PVL says, for every curve and drive
+    for ax in r.axes:
+        t_verify = next(p.t0_ns for p in ax.phases if p.phase == "verify")
+        for c in PVL.curves:
+            assert read_back_from_trace(r.trace, ax.node_id, c.curve_id, t_verify) == list(c.setpoints)
+    assert all(n["verdict"] == "read back = written" and n["source"] == "bus"
+               for c in f["curves"] for n in c["nodes"])
+    text = o.report.text()
+    assert "bus LB: bus-time lower bound = exchanges x 2 frames x 111 bits / 500 kbit/s" in text
+    assert f"  transfer phases{2 * TRANSFER:>17}{2 * TRANSFER:>11}" in text
+
+
 def test_reset_then_verify_reads_what_survives_the_restart():
     o = commission(axes=1, reset=True)
     ax = o.axis(1)
@@ -115,10 +171,15 @@ def test_the_demo_command(tmp_path, capsys):
     """`make demo`: two axes with the default options (realistic drive timings, flash, reset, verify)."""
     report = tmp_path / "report"
     trace = tmp_path / "run.blf"
+    report.mkdir()
+    (report / "curve_99.png").write_bytes(b"an earlier report's plot")     # a reused folder
+    (report / "can.asc").write_text("an earlier report's trace")
     assert main(["commission", str(EXAMPLE), "--axes", "2", "--report", str(report), "--trace", str(trace)]) == 0
     out = capsys.readouterr()
     assert "result: PASSED (2 axes commissioned and verified)" in out.out
     assert "node 1   parameters          done: 30 parameters, 30 exchanges, 30 scans" in out.err
+    command = f"linmot-st commission {EXAMPLE} --axes 2 --trace {trace} --report {report}"
+    assert out.out.splitlines()[0] == command
     names = sorted(p.name for p in report.iterdir())
     assert names == sorted(["report.md", "report.json", "can.log"] +
                            [f"curve_{c}.png" for c in (1, 2, 23)])
@@ -127,8 +188,14 @@ def test_the_demo_command(tmp_path, capsys):
     assert [p["phase"] for p in fig["axes"][0]["phases"]] == ["start", "check", "params", "curves", "ct", "flash",
                                                              "reset", "verify"]
     assert fig["axes"][1]["exchanges"] == fig["axes"][1]["exchanges_on_bus"]
-    assert 1.0 < fig["bus"]["ratio"] and fig["bus"]["lower_bound_ms"] > 0
-    assert (report / "report.md").read_text().startswith("# Commissioning report")
+    need = 2 * (TRANSFER + FLASH_NECESSARY + 1)                       # + the reset request
+    assert fig["run"]["necessary_exchanges"] == need
+    assert fig["bus"]["lower_bound_ms"] == pytest.approx(bound_ms(need), rel=1e-12)
+    assert fig["bus"]["ratio"] == pytest.approx(fig["run"]["time_ms"] / bound_ms(need))
+    assert (report / "report.md").read_text().splitlines()[0] == f"# Commissioning report: `{command}`"
+    # the progress lines and the report give the same end times
+    for a in fig["axes"]:
+        assert f"{a['end_ms']:9.1f} ms  node {a['node']:<3} commissioned" in out.err
     assert (report / "curve_1.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     from linmot_st.bus.trace import read_trace
     logged = read_trace(report / "can.log")

@@ -74,11 +74,17 @@ def test_a_mismatching_layer_writes_nothing(name, error_id, tree, dataset_mc_ver
             in text)
     assert f"the drive has tree ID {drive_layer[0]}, version {drive_layer[1]}.{drive_layer[2]}" in text
     assert "nothing was written" in text
+    assert bad.fail_kind == "layer"
     failed = "node 2" if dataset_mc_version is None else "nodes 1, 2"      # the patched dataset serves both
-    assert f"result: FAILED (commissioning failed on {failed};" in text
-    assert not o.verification.node_ok(2)                            # and the verification says what differs
-    rom = next(c for c in o.verification.for_node(2) if c.what == "parameters ROM")
-    assert rom.differences and rom.equal < 30
+    assert f"result: FAILED (commissioning failed on {failed})" in text   # the verification has nothing to add
+    # the verification checks that the drive is as it was when switched on (not the ~40 PVL items it lacks)
+    assert [c.what for c in o.verification.for_node(2)] == ["drive unchanged"] and o.verification.node_ok(2)
+    assert ("node 2: nothing written (as intended: the run stopped in the compatibility check); drive unchanged"
+            in text)
+    assert "missing on the drive" not in text.split("node 2: nothing written")[1]
+    # the plots and the report do not call the PVL's curves "written" on that drive
+    for c in o.report.figures["curves"]:
+        assert next(n for n in c["nodes"] if n["node"] == 2)["verdict"] == "not written"
     node1 = o.axis(1)
     assert node1.done == (dataset_mc_version is None)               # a drive that matches is commissioned
 
@@ -90,7 +96,7 @@ def test_a_refused_parameter_stops_at_that_upid():
     o = commission(axes=1, drive_factory=fast_drive(profile))
     ax = o.axis(1)
     assert ax.error and (ax.error_id, ax.abort_code) == (0x0302, 0x06090030)
-    assert (ax.fail_phase, ax.fail_item) == ("params", 0x13A5)
+    assert (ax.fail_phase, ax.fail_kind, ax.fail_item) == ("params", "param", 0x13A5)
     text = o.report.text()
     assert ("Failed in phase parameters, UPID 13A5h Motion Control SW\\Position Controller\\Control Parameter "
             "Set A\\FF Friction: ErrorID 16#0302 the drive answered with an SDO abort (code on the AbortCode output): "
@@ -123,7 +129,7 @@ def test_answers_lost_in_the_middle_of_a_curve():
     # answers 1..6 layers, 7..36 parameters, 37 delete all curves, 38..66 curve 23 (50h, 18 info, 10 points),
     # 67 curve 1's 50h, 68..85 its info block: answer 101 is the one to setpoint 15 of curve 1
     assert ax.error and ax.error_id == 0x0301
-    assert (ax.fail_phase, ax.fail_item, ax.fail_step) == ("curves", 1, 19 + 15)
+    assert (ax.fail_phase, ax.fail_kind, ax.fail_item, ax.fail_step) == ("curves", "curve", 1, 19 + 15)
     assert ax.exchanges == 101
     curves = next(p for p in ax.phases if p.phase == "curves")
     assert curves.t1_ns - curves.t0_ns >= 1_000_000_000             # the channel's SDO timeout (1 s)
@@ -150,10 +156,87 @@ def test_a_read_back_that_differs_is_reported_with_both_values():
     assert [p.phase for p in ax.phases][-1] == "verify"
 
 
+def test_a_drive_that_changed_although_the_check_failed_is_compared_in_full():
+    """The condensed "nothing written" is checked, not assumed: a change shows up, with the full comparison."""
+    from types import SimpleNamespace
+
+    from linmot_st.commission.verify import drive_state, verify
+
+    drive = E1100Drive(1)
+    before = {1: drive_state(drive)}
+    opts = SimpleNamespace(reset=False, live_ram=False, flash=True)
+    v = verify(PVL, {1: drive}, opts, before=before, stopped_in_check={1})
+    assert [c.what for c in v.checks] == ["drive unchanged"] and v.ok
+    drive.params.write(0x1194, 2, ram=False, rom=True)            # something wrote the motor type
+    v = verify(PVL, {1: drive}, opts, before=before, stopped_in_check={1})
+    same = v.checks[0]
+    assert same.what == "drive unchanged" and not same.ok and same.differences == ["1194h: ROM/RAM (0, 0) before, (2, 0) after"]
+    assert "yet the drive changed" in same.note
+    assert {"parameters ROM", "curves RAM", "command table RAM"} <= {c.what for c in v.checks}
+
+
+def _mutate_answer(node: int, index: int, sub: int, nth: int = 1):
+    """prepare_bus: the drive's nth upload answer for (index, sub) reaches the PLC with its value changed."""
+    seen = {"n": 0}
+
+    def pred(f) -> bool:
+        if (f.can_id == 0x580 + node and f.data[0] & 0xE0 == 0x40
+                and f.data[1:4] == bytes([index & 0xFF, index >> 8, sub])):
+            seen["n"] += 1
+            return seen["n"] == nth
+        return False
+
+    def mutate(f):
+        d = bytearray(f.data)
+        d[6] ^= 0xFF
+        return type(f)(can_id=f.can_id, data=bytes(d))
+
+    return lambda bus, drives: bus.mutate_payload(pred, mutate, count=1)
+
+
+READ_BACK_FAILURES = [
+    # examples/two_axes.pvl has curves 1, 2, 23 and command-table entries 1, 2, 3: "1" alone is ambiguous
+    pytest.param(0x2001, 0x86, "entry", 1, "command-table entry 1, 2-byte step 1", id="entry"),
+    pytest.param(0x2001, 0x61, "curve", 1, "curve 1 'MinJerk_100mm_400ms', info word 1", id="curve"),
+    pytest.param(0x3194, 0x02, "param", 0x1194, "UPID 1194h Motion Control SW\\Motor Configuration\\Motor Type",
+                 id="parameter"),
+]
+
+
+@pytest.mark.parametrize("index, sub, kind, item, words", READ_BACK_FAILURES)
+def test_a_read_back_failure_names_the_kind_of_item(index, sub, kind, item, words):
+    """FailItem is a number; FailKind says whether it is a UPID, a curve or an entry (the PLC knows)."""
+    o = commission(axes=1, prepare_bus=_mutate_answer(1, index, sub))
+    ax = o.axis(1)
+    assert ax.error and ax.error_id == 0x0603
+    assert (ax.fail_phase, ax.fail_kind, ax.fail_item) == ("verify", kind, item)
+    assert o.report.figures["axes"][0]["fail"]["kind"] == kind
+    assert f"node 1: Failed in phase verify (read back), {words}: ErrorID 16#0603" in o.report.text()
+
+
+def test_a_changed_setpoint_in_the_read_back_is_shown(tmp_path):
+    """The 10th (last) setpoint answer of curve 23 reaches the PLC changed: the FB fails there, and the
+    report and the plot (its data) say that 1 setpoint of the read-back differs."""
+    o = commission(axes=1, prepare_bus=_mutate_answer(1, 0x2017, 0x62, nth=10))
+    ax = o.axis(1)
+    assert (ax.error_id, ax.fail_kind, ax.fail_item, ax.fail_step) == (0x0603, "curve", 23, 19 + 9)
+    curve = next(c for c in o.report.figures["curves"] if c["curve"] == 23)
+    assert curve["nodes"] == [dict(node=1, written=True, read_back=10, source="bus", differ=1,
+                                   verdict="1 setpoint(s) differ")]
+    text = o.report.text()
+    assert "curve 23 'Example_Curve', setpoint 9: ErrorID 16#0603" in text
+    assert "curve 23 'Example_Curve', 10 setpoints: node 1 1 setpoint(s) differ" in text
+    # the drive holds the right curve: only the answer on the bus was changed
+    assert o.verification.ok
+    files = o.report.write(tmp_path)
+    assert "curve_23.png" in files["plots"]
+
+
 def test_a_broken_dataset_header_fails_before_any_frame():
     o = commission(axes=1, prepare_plc=lambda plc: plc.__setitem__(f"{DS}[1]", 0x12345678))
     ax = o.axis(1)
     assert ax.error and ax.error_id == 0x0601 and (ax.fail_phase, ax.fail_step) == ("start", 1)
+    assert ax.fail_kind == "dataset" and "dataset word 1" in o.report.text()
     assert ax.exchanges == 0 and not [e for e in o.result.trace if e.frame.can_id == 0x601]
     assert [(p.phase, p.scans) for p in ax.phases] == [("start", 1)]
 
@@ -164,6 +247,7 @@ def test_a_broken_record_fails_where_it_is():
     ax = o.axis(1)
     assert ax.error and ax.error_id == 0x0601 and ax.fail_step == curve
     assert ax.fail_phase == "params"                                # found when the parameters were written
+    assert ax.fail_kind == "dataset" and f"dataset word {curve}" in o.report.text()
     assert "dataset malformed" in o.report.text()
 
 
@@ -177,7 +261,7 @@ class StubbornDrive(E1100Drive):
 def test_a_failed_flash_save_starts_the_mc_again():
     o = commission(axes=1, drive_factory=lambda n: StubbornDrive(n, timings=DriveTimings.fast()))
     ax = o.axis(1)
-    assert ax.error and ax.error_id == 0x04D7 and (ax.fail_phase, ax.fail_item) == ("flash", 0x40)
+    assert ax.error and ax.error_id == 0x04D7 and (ax.fail_phase, ax.fail_kind, ax.fail_item) == ("flash", "service", 0x40)
     subs = [e.frame.data[3] for e in o.result.trace if e.frame.can_id == 0x601 and e.frame.data[1:3] == b"\x00\x20"]
     assert subs[-3:] == [0x35, 0x40, 0x36]                          # stop, save (refused), start again
     assert o.result.drives[1].mc_phase == "running"
@@ -221,6 +305,58 @@ def test_command_line_errors(tmp_path, capsys):
     bad.write_text("@FileType,PVL\n@FormatVersion,1\n@StartObject,Curve\n")
     assert main(["commission", str(bad)]) == 1
     assert "bad.pvl:" in capsys.readouterr().err
+
+
+class Built(Exception):
+    """Raised instead of building: the arguments were accepted."""
+
+
+@pytest.fixture
+def no_build(monkeypatch):
+    """The command's build step raises Built: a refusal must come before it."""
+    from linmot_st.commission import project
+
+    def build(*a, **k):
+        raise Built
+    monkeypatch.setattr(project, "build_project", build)
+
+
+SEED_CURVE = EXAMPLE.parent / "seed_curve.pvl"
+SEED_PARAMS = EXAMPLE.parent / "seed_parameters.pvl"
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--report", "/proc/nope"], "error: --report /proc/nope: cannot create or write the folder"),
+    (["--bus", "foo"], "error: --bus 'foo': expected sim, virtual[:CHANNEL], or INTERFACE:CHANNEL"),
+    (["--bus", "foo:bar"], "error: --bus 'foo:bar': python-can has no interface 'foo'"),
+    (["--bus", "udp_multicast:x"], "not supported"),
+    (["--trace", "run.txt"], "error: --trace run.txt: the extension says the format"),
+    (["--no-flash"], "error: --no-flash with the reset (on by default)"),
+    (["--no-flash", "--reset"], "Add --no-reset"),
+], ids=["report", "bus", "bus-interface", "udp", "trace", "no-flash", "no-flash-reset"])
+def test_bad_arguments_are_refused_before_the_build(no_build, capsys, args, message):
+    assert main(["commission", str(SEED_CURVE), "-q", *args]) == 2
+    assert message in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("pvl, args", [
+    (SEED_CURVE, ["--no-flash", "--no-reset"]),                     # RAM holds the curve until the next power cycle
+    (SEED_PARAMS, ["--no-flash"]),                                  # nothing to lose in flash: the reset is fine
+])
+def test_no_flash_is_accepted_where_it_can_work(no_build, tmp_path, pvl, args):
+    with pytest.raises(Built):
+        main(["commission", str(pvl), "-q", "--report", str(tmp_path / "new" / "folder"), *args])
+    assert (tmp_path / "new" / "folder").is_dir()                   # created before the build
+
+
+def test_a_report_folder_that_cannot_be_written_after_the_run(tmp_path, capsys):
+    """The result is printed first; the failed write is an error message and exit status 1, no traceback."""
+    report = tmp_path / "r"
+    (report / "report.json").mkdir(parents=True)                    # a folder where the file must go
+    assert main(["commission", str(EXAMPLE), "-q", "--drive-timings", "fast", "--report", str(report)]) == 1
+    out = capsys.readouterr()
+    assert "result: PASSED (1 axis commissioned and verified)" in out.out
+    assert f"error: --report {report}: Is a directory" in out.err
 
 
 def test_a_plc_fault_ends_the_run_and_is_reported():

@@ -4,7 +4,9 @@ Steps: read the PVL file, generate its dataset (`pvl to-st`), build plc_project 
 emulated drives (simulated bus by default; NodeServer threads on python-can buses), step the PLC until
 every axis is done or failed (progress on stderr), verify each emulated drive's memory against the PVL
 file, print the report (stdout) and write the report folder. Exit status: 0 when every axis was
-commissioned and the verification passed, 1 otherwise, 2 for bad arguments.
+commissioned and the verification passed, 1 otherwise (also when the report folder cannot be written after
+the run), 2 for bad arguments (checked before the build: the bus spec, options that cannot work together, a
+report folder or trace file that cannot be created).
 """
 
 from __future__ import annotations
@@ -42,7 +44,8 @@ def register(subparsers) -> None:
     p.add_argument("--live-ram", action=argparse.BooleanOptionalAction, default=False,
                    help="write RAM+ROM, ROM only where the drive refuses RAM (non-live parameters) (default off)")
     p.add_argument("--flash", action=argparse.BooleanOptionalAction, default=True,
-                   help="save curves and command table to flash (default on)")
+                   help="save curves and command table to flash (default on). --no-flash needs --no-reset when "
+                        "the PVL has curves or command-table entries: a reset would reload the old ones from flash")
     p.add_argument("--reset", action=argparse.BooleanOptionalAction, default=True,
                    help="reset the drives at the end, so that RAM = ROM and the verify reads what survives "
                         "a restart (default on)")
@@ -59,6 +62,52 @@ def register(subparsers) -> None:
     p.set_defaults(func=run_command)
 
 
+def command_line(args: argparse.Namespace) -> str:
+    """The command as a user would type it: the file and every option that differs from its default."""
+    import shlex
+    parts = ["linmot-st", "commission", args.file]
+    for name, flag in (("axes", "--axes"), ("bus", "--bus"), ("bitrate", "--bitrate"), ("backend", "--backend"),
+                       ("trace", "--trace"), ("trace_format", "--trace-format"), ("report", "--report"),
+                       ("drive_timings", "--drive-timings"), ("timeout", "--timeout")):
+        value = getattr(args, name)
+        if value is not None and value != DEFAULTS.get(name):
+            parts += [flag, f"{value:g}" if isinstance(value, float) else str(value)]
+    if args.node_ids:
+        parts += ["--node-ids", ",".join(map(str, args.node_ids))]
+    for name, default in (("live_ram", False), ("flash", True), ("reset", True), ("verify", True)):
+        if getattr(args, name) != default:
+            parts.append(f"--{'' if getattr(args, name) else 'no-'}{name.replace('_', '-')}")
+    if not args.emulate:
+        parts.append("--no-emulate")
+    if args.quiet:
+        parts.append("-q")
+    return " ".join(shlex.quote(x) for x in parts)
+
+
+DEFAULTS = {"bus": "sim", "bitrate": 500_000, "backend": "auto", "trace_format": "log"}
+
+
+def _writable_folder(path: str) -> None:
+    """Create the report folder now (OSError if it cannot be), so that a bad path fails before the run."""
+    import os
+    from pathlib import Path
+    folder = Path(path)
+    folder.mkdir(parents=True, exist_ok=True)
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise PermissionError(13, "not writable", str(folder))
+
+
+def _check_trace_path(path: str) -> None:
+    import os
+    from pathlib import Path
+    p = Path(path)
+    if p.suffix.lower() not in (".log", ".asc", ".blf"):
+        raise ValueError(f"--trace {path}: the extension says the format: .log (candump), .asc or .blf")
+    parent = p.parent if str(p.parent) else Path(".")
+    if not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK):
+        raise ValueError(f"--trace {path}: cannot write into {parent}")
+
+
 def run_command(args: argparse.Namespace) -> int:
     import time
     from pathlib import Path
@@ -70,8 +119,8 @@ def run_command(args: argparse.Namespace) -> int:
     from .progress import Progress
     from .project import build_project, prepare
     from .report import Context, Report
-    from .runner import RunOptions, run
-    from .verify import verify
+    from .runner import RunOptions, check_bus_spec, run
+    from .verify import verify_run
 
     err = sys.stderr
     try:
@@ -92,10 +141,24 @@ def run_command(args: argparse.Namespace) -> int:
                       timings=args.drive_timings, timeout_s=args.timeout, emulate=args.emulate)
     try:
         opts.nodes()
+        check_bus_spec(opts.bus)
         if not opts.emulate and opts.simulated:
             raise ValueError("--no-emulate needs a real bus (--bus socketcan:CHANNEL)")
         if opts.bitrate <= 0 or 1_000_000_000 % opts.bitrate:
             raise ValueError(f"--bitrate {opts.bitrate}: must divide 1e9 (125000, 250000, 500000, 1000000)")
+        if opts.reset and not opts.flash and (pvl.curves or pvl.command_table):
+            raise ValueError("--no-flash with the reset (on by default): the reset would reload the old curves and "
+                             "command table from flash, so the FB refuses it (ResetNeedsFlash). Add --no-reset "
+                             "(RAM then holds the new curves and entries until the next power cycle), or keep the "
+                             "flash save")
+        if args.trace:
+            _check_trace_path(args.trace)
+        if args.report:
+            try:
+                _writable_folder(args.report)
+            except OSError as e:
+                raise ValueError(f"--report {args.report}: cannot create or write the folder "
+                                 f"({e.strerror or e})") from None
     except ValueError as e:
         print(f"error: {e}", file=err)
         return 2
@@ -125,26 +188,31 @@ def run_command(args: argparse.Namespace) -> int:
     finally:
         if progress:
             progress.close()
-    verification = verify(pvl, result.drives if opts.emulate else {}, opts)
-    ctx = Context(pvl_path=args.file, command=" ".join(["linmot-st", "commission", *sys.argv[2:]]) if
-                  sys.argv[1:2] == ["commission"] else f"linmot-st commission {args.file}",
+    verification = verify_run(pvl, result)
+    ctx = Context(pvl_path=args.file, command=command_line(args),
                   backend=res.backend, build_s=build_s, build_cached=res.cached, project=rel,
                   dataset_words=dataset.words)
     report = Report(ctx, result, dataset, verification, pvl)
     report.compute()
-    if args.report:
-        report.write(Path(args.report), args.trace_format)
+    sys.stdout.write(report.text())             # first: whatever happens to the files, the result is shown
+    sys.stdout.flush()
+    status = 0 if report.figures["result"]["passed"] else 1
     if args.trace:
         from linmot_st.bus.trace import write_trace
         try:
             write_trace(result.trace, args.trace)
-        except ValueError as e:
-            print(f"error: {e}", file=err)
-    sys.stdout.write(report.text())
+        except (OSError, ValueError) as e:
+            print(f"error: --trace {args.trace}: {getattr(e, 'strerror', None) or e}", file=err)
+            status = 1
     if args.report:
-        print(f"report: {args.report}/report.md, report.json, can.{args.trace_format}, "
-              f"{len(report.figures['files']['plots'])} curve plot(s)")
-    return 0 if report.figures["result"]["passed"] else 1
+        try:
+            files = report.write(Path(args.report), args.trace_format)
+        except OSError as e:
+            print(f"error: --report {args.report}: {e.strerror or e} ({e.filename or args.report})", file=err)
+            return 1
+        print(f"report: {args.report}/report.md, report.json, {files['trace']}, "
+              f"{len(files['plots'])} curve plot(s)")
+    return status
 
 
 def _rel(path) -> str:

@@ -2,24 +2,31 @@
 the verification, the failure in words; printed as text, written as Markdown and JSON with the CAN trace
 and the curve plots.
 
-Bus-time lower bound (docs/commissioning.md, after shared/spec/can-bus-limits.md): the time the run's SDO
-exchanges need on the bus alone, every frame sent back to back with no stuff bits and no device
-turnaround: exchanges x 2 frames x 111 bits (an 8-byte data frame without stuff bits, 3-bit interframe
-space included) / bit rate. All axes share one bus, so the run's bound counts the exchanges of all axes.
+Bus-time lower bound (docs/commissioning.md, after shared/spec/can-bus-limits.md): the time SDO exchanges
+need on the bus alone, every frame sent back to back with no stuff bits and no device turnaround:
+exchanges x 2 frames x 111 bits (an 8-byte data frame without stuff bits, 3-bit interframe space included,
+`linmot_st.bus.bits.unstuffed_bus_bits(8)`) / bit rate. Per axis and phase it counts the exchanges that axis
+made. All axes share one bus, so the run-level figures ("all axes") count the exchanges of all axes, and
+their bound counts the NECESSARY exchanges (`necessary_exchanges`: what a successful run cannot do without;
+flash polls beyond one per store and LiveRam's ROM-only retries are not necessary); the bound of the actual
+exchanges stands beside it.
 """
 
 from __future__ import annotations
 
 import json
+import textwrap
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from linmot_st.bus.bits import unstuffed_bus_bits
 from linmot_st.errors import describe
-from linmot_st.pvl.dataset import Dataset
+from linmot_st.pvl.dataset import Dataset, expected_exchanges
+from .plots import ReadBack, curve_read_backs
 from .runner import RunResult
 from .verify import Verification
 
-SDO_FRAME_BITS = 111            # linmot_st.bus.bits.unstuffed_bus_bits(8)
+SDO_FRAME_BITS = unstuffed_bus_bits(8)      # 111: an SDO request or answer without stuff bits, IFS included
 PHASE_TITLES = {"start": "start (dataset header)", "check": "compatibility check", "params": "parameters",
                 "curves": "curves", "ct": "command table", "flash": "flash save", "reset": "reset + boot",
                 "verify": "verify (read back)"}
@@ -29,6 +36,32 @@ WAIT_PHASES = ("start", "flash", "reset")      # their time is the drive's own w
 
 def lower_bound_ns(exchanges: int, bit_ns: int) -> int:
     return exchanges * 2 * SDO_FRAME_BITS * bit_ns
+
+
+def necessary_exchanges(ds: Dataset, opts, transfer_only: bool = False) -> int:
+    """The SDO exchanges one axis cannot do without in a successful run with these options: every write and
+    read of the dataset (`expected_exchanges`), and, for the whole run, the flash services with one poll per
+    store (the FB must poll at least once to learn the save ended) and the reset request."""
+    if transfer_only:
+        return expected_exchanges(ds, verify=opts.verify, flash=False)
+    n = expected_exchanges(ds, verify=opts.verify, flash=opts.flash)
+    if opts.flash and (ds.curves or ds.entries):
+        n += (1 if ds.curves else 0) + (1 if ds.entries else 0)
+    return n + (1 if opts.reset else 0)
+
+
+def _merge(intervals: list[tuple[int, int]]) -> list[tuple[int, int]]:
+    out: list[list[int]] = []
+    for a, b in sorted(intervals):
+        if out and a <= out[-1][1]:
+            out[-1][1] = max(out[-1][1], b)
+        elif b > a:
+            out.append([a, b])
+    return [(a, b) for a, b in out]
+
+
+def _n(k: int, word: str, plural: str | None = None) -> str:
+    return f"{k} {word if k == 1 else (plural or word + 's')}"
 
 
 @dataclass
@@ -51,10 +84,12 @@ class Report:
     verification: Verification
     pvl: object
     figures: dict = field(default_factory=dict)
+    read_backs: dict[int, list[ReadBack]] = field(default_factory=dict)     # curve ID -> per axis
 
     # ------------------------------------------------------------------ figures
     def compute(self) -> dict:
         r, bit = self.run, self.run.bit_ns
+        self.read_backs = {c.curve_id: curve_read_backs(r, c) for c in self.pvl.curves}
         axes = []
         for ax in r.axes:
             on_bus = _bus_exchanges(r.trace, ax.node_id, ax.started_ns, ax.ended_ns or r.t_end_ns)
@@ -73,7 +108,7 @@ class Report:
                 result="done" if ax.done else ("error" if ax.error else "not finished"),
                 error_id=ax.error_id, error=describe(ax.error_id, ax.abort_code) if ax.error else "",
                 abort_code=ax.abort_code, failure=self.failure_text(ax) if ax.error else "",
-                fail=dict(phase=ax.fail_phase, item=ax.fail_item, step=ax.fail_step,
+                fail=dict(phase=ax.fail_phase, kind=ax.fail_kind, item=ax.fail_item, step=ax.fail_step,
                           expected=ax.fail_expected, actual=ax.fail_actual) if ax.error else None,
                 drive_layer=dict(zip(("tree_id", "main_version", "sub_version"), ax.drive_layer)),
                 up_ms=ax.up_ns / 1e6 if ax.up_ns is not None else None,
@@ -86,7 +121,19 @@ class Report:
                 phases=phases))
         span = r.t_end_ns - r.t_start_ns
         total_ex = sum(a.exchanges for a in r.axes)
-        lb = lower_bound_ns(total_ex, bit)
+        complete = r.commissioned
+        # all axes on the one bus: the bound counts the necessary exchanges of every axis (a failed run has
+        # no necessary count: its bound counts what it did)
+        need = necessary_exchanges(self.dataset, r.options) * len(r.axes) if complete else None
+        lb_actual = lower_bound_ns(total_ex, bit)
+        lb = lower_bound_ns(need, bit) if need is not None else None
+        windows = _merge([(p.t0_ns, p.t1_ns) for ax in r.axes for p in ax.phases if p.phase in TRANSFER_PHASES])
+        tr_ns = sum(b - a for a, b in windows)
+        tr_busy = sum(self._busy_ns(a, b) for a, b in windows)
+        tr_ex = sum(a["transfer"]["exchanges"] for a in axes)
+        tr_need = necessary_exchanges(self.dataset, r.options, transfer_only=True) * len(r.axes) if complete else None
+        tr_lb_actual = lower_bound_ns(tr_ex, bit)
+        tr_lb = lower_bound_ns(tr_need, bit) if tr_need is not None else None
         st = r.stats
         self.figures = dict(
             command=self.ctx.command, pvl=self.ctx.pvl_path, backend=self.ctx.backend,
@@ -100,14 +147,27 @@ class Report:
                          task_ms=r.tick_ns / 1e6),
             axes=axes,
             run=dict(start_ms=r.t_start_ns / 1e6, end_ms=r.t_end_ns / 1e6, time_ms=span / 1e6,
-                     exchanges=total_ex, scans=r.scans, wall_s=round(r.wall_s, 3), timed_out=r.timed_out,
-                     plc_fault=r.fault,
+                     exchanges=total_ex, necessary_exchanges=need, scans=r.scans, wall_s=round(r.wall_s, 3),
+                     timed_out=r.timed_out, plc_fault=r.fault,
                      overruns=r.overruns, max_lateness_ms=r.max_lateness_ns / 1e6),
-            bus=dict(frames=st.frames if st else 0, errors=st.errors if st else 0,
+            bus=dict(frames=st.frames if st else 0, frames_in_trace=sum(1 for e in r.trace if e.status != "error"),
+                     errors=st.errors if st else 0,
                      load=st.load if st else 0.0, busy_ms=(st.busy_ns / 1e6) if st else 0.0,
-                     stuffing_ratio=st.stuffing_ratio if st else 0.0,
-                     lower_bound_ms=lb / 1e6, ratio=(span / lb) if lb else None,
+                     stuffing_ratio=st.stuffing_ratio if st else 0.0, frame_bits=SDO_FRAME_BITS,
+                     lower_bound_ms=lb / 1e6 if lb is not None else None, ratio=(span / lb) if lb else None,
+                     lower_bound_actual_ms=lb_actual / 1e6, ratio_actual=(span / lb_actual) if lb_actual else None,
                      scan_bound_ms=max((a.exchanges for a in r.axes), default=0) * r.tick_ns / 1e6),
+            transfer=dict(time_ms=tr_ns / 1e6, exchanges=tr_ex, necessary_exchanges=tr_need,
+                          busy_ms=tr_busy / 1e6, load=tr_busy / tr_ns if tr_ns else 0.0,
+                          lower_bound_ms=tr_lb / 1e6 if tr_lb is not None else None,
+                          ratio=tr_ns / tr_lb if tr_lb else None,
+                          lower_bound_actual_ms=tr_lb_actual / 1e6,
+                          ratio_actual=tr_ns / tr_lb_actual if tr_lb_actual else None),
+            curves=[dict(curve=cid, setpoints=len(c.setpoints),
+                         nodes=[dict(node=rb.node, written=rb.written,
+                                     read_back=len(rb.setpoints) if rb.setpoints else None, source=rb.source,
+                                     differ=rb.differ, verdict=rb.verdict) for rb in self.read_backs[cid]])
+                    for cid, c in ((c.curve_id, c) for c in self.pvl.curves)],
             verification=dict(ok=self.verification.ok, skipped=self.verification.skipped,
                               checks=[dict(node=c.node, what=c.what, checked=c.checked, equal=c.equal,
                                            required=c.required, ok=c.ok, differences=c.differences, note=c.note)
@@ -117,12 +177,16 @@ class Report:
         )
         return self.figures
 
+    def _busy_ns(self, t0: int, t1: int) -> int:
+        from linmot_st.bus.stats import bus_stats
+        return bus_stats(self.run.trace, self.run.bit_ns, t0, t1).busy_ns
+
     # ------------------------------------------------------------------ words
     def failure_text(self, ax) -> str:
-        where = self.item_text(ax.fail_phase, ax.fail_item, ax.fail_step)
+        where = self.item_text(ax)
         what = describe(ax.error_id, ax.abort_code)
         extra = ""
-        if ax.fail_phase == "check" and ax.fail_item in (1, 2, 3, 4):
+        if ax.fail_kind == "layer" and ax.error_id in (0x0501, 0x0502, 0x0503):
             src = next((l for l in self.dataset.layers if l[0] == ax.fail_item), None)
             tid, main, sub = ax.drive_layer
             if src:
@@ -130,55 +194,65 @@ class Report:
                          f"version {src[2]}.{src[3]}; nothing was written")
         elif ax.error_id == 0x0603:
             extra = f"; read {ax.fail_actual:08X}h, expected {ax.fail_expected:08X}h"
-        return f"failed in phase {PHASE_TITLES.get(ax.fail_phase, ax.fail_phase)}, {where}: ErrorID {what}{extra}"
+        phase = PHASE_TITLES.get(ax.fail_phase, ax.fail_phase)
+        return f"failed in phase {phase}" + (f", {where}" if where else "") + f": ErrorID {what}{extra}"
 
-    def item_text(self, phase: str, item: int, step: int) -> str:
-        if phase == "check":
+    def item_text(self, ax) -> str:
+        """FailItem in words, as FailKind says what it is (the PLC's FB_LmCommission output)."""
+        kind, item, step, verifying = ax.fail_kind, ax.fail_item, ax.fail_step, ax.fail_phase == "verify"
+        if kind == "layer":
             from linmot_st.pvl import LAYERS
             return f"layer {item} ({LAYERS[item].name})" if item in LAYERS else f"layer {item}"
-        if phase in ("params",) or (phase == "verify" and self._is_param(item, step)):
+        if kind == "param":
             caption = next((p.caption for o in self.pvl.parameter_objects for p in o.parameters if p.upid == item), "")
             return f"UPID {item:04X}h {caption}".rstrip()
-        if phase == "curves" or (phase == "verify" and self.pvl.curve(item) is not None and step):
+        if kind == "curve":
             c = self.pvl.curve(item)
             name = f" '{c.name}'" if c else ""
             if step == 0:
-                part = "add / get request"
+                part = "get request (60h)" if verifying else self._first_request(ax, {
+                    0x41: "delete all curves (41h) before it", 0x50: "add request (50h)"})
             elif step <= 18:
                 part = f"info word {step}"
             else:
                 part = f"setpoint {step - 19}"
             return f"curve {item}{name}, {part}"
-        if phase == "ct":
-            return f"command-table entry {item}, " + ("prepare request" if step == 0 else f"2-byte step {step}")
-        if phase == "verify":
-            if self.pvl.curve(item) is not None:
-                return f"curve {item}, get request"
-            return f"item {item}"
-        if phase in ("flash", "reset"):
+        if kind == "entry":
+            if step == 0:
+                part = "get request (85h)" if verifying else self._first_request(ax, {
+                    0x81: "delete all entries (81h) before it", 0x83: "prepare request (83h)"})
+            else:
+                part = f"2-byte step {step}"
+            return f"command-table entry {item}, {part}"
+        if kind == "service":
             names = {0x35: "stop MC (35h)", 0x40: "save curves (40h)", 0x42: "poll flash (42h)",
                      0x80: "save / poll command table (80h)", 0x36: "start MC (36h)", 0x0B: "reset (0Bh)"}
             return names.get(item, f"service {item:02X}h")
-        if phase == "start":
-            return "dataset header" + (f" word {step}" if step else "")
-        return f"item {item}"
+        if kind == "dataset":
+            return f"dataset word {step}"
+        return ""
 
-    def _is_param(self, item: int, step: int) -> bool:
-        is_param = any(p.upid == item for o in self.pvl.parameter_objects for p in o.parameters)
-        return is_param and not (self.pvl.curve(item) is not None and step)
+    def _first_request(self, ax, names: dict[int, str]) -> str:
+        """Which of the requests with FailStep 0 failed: the last one the PLC sent to the node."""
+        req = 0x600 + ax.node_id
+        last = next((e.frame for e in reversed(self.run.trace) if e.frame.can_id == req and e.status != "error"
+                     and len(e.frame.data) == 8), None)
+        return names.get(last.data[3], " / ".join(names.values())) if last else " / ".join(names.values())
 
     # ------------------------------------------------------------------ text
     def text(self) -> str:
         f = self.figures or self.compute()
-        o, d, run, bus = f["options"], f["dataset"], f["run"], f["bus"]
-        bus_name = ("simulated bus" if o["bus"] == "sim" else o["bus"]) + f" {o['bitrate'] // 1000} kbit/s"
+        o, d, run, bus, tr = f["options"], f["dataset"], f["run"], f["bus"], f["transfer"]
+        kbit = f"{o['bitrate'] / 1000:g} kbit/s"
+        bus_name = ("simulated bus" if o["bus"] == "sim" else o["bus"]) + f" {kbit}"
         lines = [
-            f"linmot-st commission {self.ctx.pvl_path}",
-            f"  {o['axes']} ax{'is' if o['axes'] == 1 else 'es'} (node ID{'s' if o['axes'] > 1 else ''} "
+            self.ctx.command,
+            f"  {_n(o['axes'], 'axis', 'axes')} (node ID{'s' if o['axes'] > 1 else ''} "
             f"{', '.join(map(str, o['node_ids']))}), {bus_name}, PLC task {o['task_ms']:g} ms, backend {f['backend']} "
             f"({self.ctx.project}, build {'cached' if f['build']['cached'] else f'{self.ctx.build_s:.1f} s'})",
-            f"  dataset: {d['layers']} layers, {d['parameters']} parameters, {d['curves']} curves "
-            f"({d['setpoints']} setpoints), {d['entries']} command-table entries = {d['words']} words",
+            f"  dataset: {_n(d['layers'], 'layer')}, {_n(d['parameters'], 'parameter')}, {_n(d['curves'], 'curve')} "
+            f"({_n(d['setpoints'], 'setpoint')}), {_n(d['entries'], 'command-table entry', 'command-table entries')}"
+            f" = {_n(d['words'], 'word')}",
             "  options: " + ", ".join(f"{k} {'on' if o[k] else 'off'}" for k in ("live_ram", "flash", "reset", "verify"))
             + (f", drive timings {o['drive_timings']}" if o["drive_timings"] else ""),
             "",
@@ -186,7 +260,7 @@ class Report:
         for a in f["axes"]:
             head = f"node {a['node']}: "
             if a["result"] == "done":
-                head += f"commissioned in {a['time_ms']:.1f} ms, {a['exchanges']} exchanges"
+                head += f"commissioned in {a['time_ms']:.1f} ms, {_n(a['exchanges'], 'exchange')}"
             elif a["result"] == "error":
                 head += a["failure"].upper()[:1] + a["failure"][1:]
             else:
@@ -210,29 +284,63 @@ class Report:
                     lines.append(f"  (the bus carried {a['exchanges_on_bus']} answers to this node: "
                                  f"{a['exchanges'] - a['exchanges_on_bus']} request(s) unanswered)")
             lines.append("")
+        complete = run["necessary_exchanges"] is not None
+        lines.append(f"{'all axes, one bus':<24}{'exchanges':>10}{'necessary':>11}{'time ms':>11}{'bus LB ms':>11}"
+                     f"{'x LB':>8}{'bus load':>10}")
+        for title, g, time_ms, load in (("transfer phases", tr, tr["time_ms"], tr["load"]),
+                                        ("whole run", {**bus, "exchanges": run["exchanges"],
+                                                       "necessary_exchanges": run["necessary_exchanges"]},
+                                         run["time_ms"], bus["load"])):
+            lb = g["lower_bound_ms"] if complete else g["lower_bound_actual_ms"]
+            ratio = g["ratio"] if complete else g["ratio_actual"]
+            need = g["necessary_exchanges"]
+            lines.append(f"  {title:<22}{g['exchanges']:>10}{'-' if need is None else need:>11}{time_ms:>11.1f}"
+                         f"{lb:>11.2f}{_r(ratio):>8}{100 * load:>8.1f} %")
+        if complete:
+            lines.append(f"  (bound of the actual exchanges, flash polls included: transfer phases "
+                         f"{tr['lower_bound_actual_ms']:.2f} ms = {_r(tr['ratio_actual'])} x, whole run "
+                         f"{bus['lower_bound_actual_ms']:.2f} ms = {_r(bus['ratio_actual'])} x)")
+        else:
+            lines.append("  (the run did not complete: the bounds count the exchanges it made)")
         lines += [
-            f"run: {run['time_ms']:.1f} ms of PLC time from the first start to the last end, {run['exchanges']} exchanges, "
-            f"{run['scans']} scans in {run['wall_s']:.2f} s wall"
+            "",
+            f"run: {run['time_ms']:.1f} ms of PLC time from the first start ({run['start_ms']:.1f} ms) to the last "
+            f"end ({run['end_ms']:.1f} ms), {_n(run['exchanges'], 'exchange')}, {_n(run['scans'], 'scan')} in "
+            f"{run['wall_s']:.2f} s wall"
             + (f", {run['overruns']} late scans (max {run['max_lateness_ms']:.1f} ms)" if o["bus"] != "sim" else "")
             + (" - TIMED OUT" if run["timed_out"] else "")
             + (f" - PLC FAULT: {run['plc_fault']}" if run["plc_fault"] else ""),
-            f"bus: {bus['frames']} frames, load {100 * bus['load']:.1f} % (busy {bus['busy_ms']:.1f} ms), "
-            f"stuff bits add {100 * (bus['stuffing_ratio'] - 1):.1f} %" if bus["stuffing_ratio"] else
-            f"bus: {bus['frames']} frames",
-            f"bus-time lower bound: {run['exchanges']} exchanges x 2 frames x {SDO_FRAME_BITS} bits at "
-            f"{o['bitrate'] // 1000} kbit/s = {bus['lower_bound_ms']:.1f} ms; the run took {_r(bus['ratio'])} x that "
-            f"(one exchange per scan and drive: at least {bus['scan_bound_ms']:.0f} ms)",
+            f"bus: {_n(bus['frames'], 'frame')} in that time (the trace holds {bus['frames_in_trace']}, from "
+            f"switch-on), busy {bus['busy_ms']:.1f} ms = load {100 * bus['load']:.1f} %"
+            + (f", stuff bits add {100 * (bus['stuffing_ratio'] - 1):.1f} %" if bus["stuffing_ratio"] else ""),
+            f"scan bound: one exchange per scan and drive, at least {bus['scan_bound_ms']:.0f} ms",
             "",
-            "(drive): the phase waits for the drive's own work (MC stop/start, flash writes, boot), not for the bus",
-            "",
-            "verification (the emulated drives' memory against the PVL file):",
+            *textwrap.wrap(
+            f"bus LB: bus-time lower bound = exchanges x 2 frames x {SDO_FRAME_BITS} bits / {kbit} (8-byte frames "
+            "without stuff bits, back to back, no device turnaround); x LB = time / bus LB. Per axis it counts that "
+            "axis' exchanges; all axes share the bus, so 'all axes' counts every axis' necessary exchanges (no flash "
+            "poll beyond one per store, no ROM-only retry). (drive): the phase waits for the drive's own work (MC "
+            "stop/start, flash writes, boot), not for the bus.", width=110, subsequent_indent="  "),
         ]
+        if f["curves"]:
+            lines += ["", "curves read back (the PLC's VERIFY on the bus; else the emulated drive's RAM):"]
+            for c in f["curves"]:
+                cv = self.pvl.curve(c["curve"])
+                parts = [f"node {n['node']} {n['verdict']}"
+                         + (f" ({n['source']})" if n["source"] and n["source"] != "bus" else "") for n in c["nodes"]]
+                lines.append(f"  curve {c['curve']} '{cv.name}', {_n(c['setpoints'], 'setpoint')}: " + "; ".join(parts))
+        lines += ["", "verification (the emulated drives' memory against the PVL file):"]
         v = self.verification
         if v.skipped:
             lines.append(f"  not done: {v.skipped}")
         for node in f["options"]["node_ids"]:
             checks = v.for_node(node)
             if not checks:
+                continue
+            same = next((c for c in checks if c.what == "drive unchanged"), None)
+            if same is not None and same.ok:
+                lines.append(f"  node {node}: {same.note}; drive unchanged ({same.checked} parameters, curves and "
+                             "entries as when it was switched on): OK")
                 continue
             parts = [f"{c.what} {c.equal}/{c.checked}" for c in checks]
             lines.append(f"  node {node}: " + ", ".join(parts) + (": OK" if v.node_ok(node) else ": DIFFERENT"))
@@ -253,12 +361,12 @@ class Report:
         if not res["verified"]:
             why.append("verification " + ("not done" if v.skipped else "found differences"))
         lines += ["", f"result: {verdict}" + (f" ({'; '.join(why)})" if why else
-                                            f" ({len(f['axes'])} ax{'is' if len(f['axes']) == 1 else 'es'} "
-                                            "commissioned and verified)")]
+                                            f" ({_n(len(f['axes']), 'axis', 'axes')} commissioned and verified)")]
         return "\n".join(lines) + "\n"
 
     def markdown(self) -> str:
-        return "# Commissioning report\n\n```\n" + self.text() + "```\n\n" + self._files_md()
+        return (f"# Commissioning report: `{self.ctx.command}`\n\n```\n" + self.text() + "```\n\n"
+                + self._files_md())
 
     def _files_md(self) -> str:
         files = self.figures.get("files", {})
@@ -273,31 +381,24 @@ class Report:
 
     # ------------------------------------------------------------------ files
     def write(self, folder: Path, trace_format: str = "log") -> dict:
-        """The report folder: report.md, report.json, can.<format>, curve_<id>.png."""
+        """The report folder: report.md, report.json, can.<format>, curve_<id>.png. Curve plots and traces
+        of an earlier report in the same folder are removed first (they would not belong to this run)."""
         from linmot_st.bus.trace import write_trace
 
-        from .plots import plot_curve, read_back_from_trace
+        from .plots import plot_curve
 
         folder = Path(folder)
         folder.mkdir(parents=True, exist_ok=True)
+        for old in [*folder.glob("curve_*.png"), *(folder / f"can.{x}" for x in ("log", "asc", "blf"))]:
+            old.unlink(missing_ok=True)
         f = self.figures or self.compute()
         files: dict = {"plots": []}
         trace_name = f"can.{trace_format.lstrip('.')}"
         write_trace(self.run.trace, folder / trace_name)
         files["trace"] = trace_name
         for c in self.pvl.curves:
-            backs = []
-            for ax in self.run.axes:
-                t_verify = next((p.t0_ns for p in ax.phases if p.phase == "verify"), None)
-                drive = self.run.drives.get(ax.node_id)
-                back, source = None, ""
-                if t_verify is not None:
-                    back, source = read_back_from_trace(self.run.trace, ax.node_id, c.curve_id, t_verify), "bus"
-                if not back and drive is not None and c.curve_id in drive.curves.ram:
-                    back, source = drive.curves.ram[c.curve_id].setpoints, "drive RAM"
-                backs.append((ax.node_id, back, source))
             name = f"curve_{c.curve_id}.png"
-            plot_curve(folder / name, c, backs)
+            plot_curve(folder / name, c, self.read_backs[c.curve_id])
             files["plots"].append(name)
         files["json"] = "report.json"
         f["files"] = files

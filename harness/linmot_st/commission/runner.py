@@ -27,6 +27,34 @@ def phase_name(enum_value: str) -> str:
     return enum_value.removeprefix("LM_COM_").lower()
 
 
+def item_kind(enum_value: str) -> str:
+    """E_LmComItemKind -> dataset, layer, param, curve, entry, service ("" for LM_COM_ITEM_NONE)."""
+    kind = enum_value.removeprefix("LM_COM_ITEM_").lower()
+    return "" if kind == "none" else kind
+
+
+def check_bus_spec(spec: str) -> None:
+    """Refuse a bus spec that `linmot_st.bus.open_bus` would refuse, before anything is built (ValueError);
+    whether the bus exists is known only when it is opened."""
+    if spec == "sim":
+        return
+    interface, _, channel = spec.partition(":")
+    interface = interface.strip().lower()
+    if not interface:
+        raise ValueError(f"--bus {spec!r}: expected sim, virtual[:CHANNEL], socketcan:CHANNEL or INTERFACE:CHANNEL")
+    if interface == "udp_multicast":
+        raise ValueError("--bus udp_multicast: not supported, its traffic leaves the machine")
+    if interface == "virtual":
+        return
+    if not channel:
+        raise ValueError(f"--bus {spec!r}: expected sim, virtual[:CHANNEL], or INTERFACE:CHANNEL such as "
+                         "socketcan:can0 (an interface other than virtual needs a channel)")
+    from can.interfaces import VALID_INTERFACES
+    if interface not in VALID_INTERFACES:
+        known = sorted(set(VALID_INTERFACES) - {"udp_multicast"})
+        raise ValueError(f"--bus {spec!r}: python-can has no interface {interface!r} (it has {', '.join(known)})")
+
+
 @dataclass
 class RunOptions:
     axes: int = 1
@@ -88,6 +116,7 @@ class AxisResult:
     abort_code: int = 0
     fail_phase: str = ""
     fail_item: int = 0
+    fail_kind: str = ""                        # what fail_item names: dataset, layer, param, curve, entry, service
     fail_step: int = 0
     fail_expected: int = 0
     fail_actual: int = 0
@@ -129,7 +158,7 @@ class RunResult:
     bit_ns: int
     axes: list[AxisResult]
     trace: list                                # SimBus TraceEntry or TraceRecord
-    drives: dict                               # node ID -> E1100Drive (emulated) 
+    drives: dict                               # node ID -> E1100Drive (emulated)
     scans: int = 0
     wall_s: float = 0.0
     timed_out: bool = False
@@ -137,6 +166,7 @@ class RunResult:
     overruns: int = 0
     max_lateness_ns: int = 0
     stats: Any = None                          # BusStats over the commissioning span
+    before: dict = field(default_factory=dict)  # node ID -> verify.drive_state() when switched on
 
     @property
     def t_start_ns(self) -> int:
@@ -204,7 +234,7 @@ class Sampler:
                     cur.exchanges = exch - cur.exch0
                     ax.done, ax.error = bool(vs["done"].value), bool(vs["error"].value)
                     if self.progress:
-                        self.progress.axis_finished(ax, cur, t_scan)
+                        self.progress.axis_finished(ax, cur, cur.t1_ns)     # the time the report gives
                 self._last_exch[k] = exch
             if self.progress:
                 self.progress.tick(self, plc.time_ns)
@@ -243,6 +273,7 @@ def _collect(plc, sampler: Sampler) -> None:
         ax.error_id, ax.abort_code = c["ERRORID"], c["ABORTCODE"]
         ax.fail_phase = phase_name(c["FAILPHASE"]) if ax.error else ""
         ax.fail_item, ax.fail_step = c["FAILITEM"], c["FAILSTEP"]
+        ax.fail_kind = item_kind(c["FAILKIND"]) if ax.error else ""
         ax.fail_expected, ax.fail_actual = c["FAILEXPECTED"], c["FAILACTUAL"]
         dl = c["DRIVELAYER"]
         ax.drive_layer = (dl["TREEID"], dl["MAINVERSION"], dl["SUBVERSION"])
@@ -286,6 +317,8 @@ def _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, time
     from linmot_st.bus import SimBus
     from linmot_st.cosim import CoSim, CoSimTimeout
 
+    from .verify import drive_state
+
     bus = SimBus(opts.bitrate)
     drives = {}
     for n in nodes:
@@ -293,6 +326,7 @@ def _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, time
         bus.attach(d, f"drive{n}", latency_ns=opts.latency_ns)
         d.power_on(0)
         drives[n] = d
+    before = {n: drive_state(d) for n, d in drives.items()}
     if prepare_bus:
         prepare_bus(bus, drives)
     sim = CoSim(plc, bus, mailbox=MAILBOX, name="plc")
@@ -313,7 +347,7 @@ def _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, time
     sampler.close()
     _collect(plc, sampler)
     res = RunResult(opts, nodes, plc.tick_ns, bus.bit_ns, sampler.axes, list(bus.trace), drives,
-                    scans=sim.scans, wall_s=wall, timed_out=timed_out, fault=fault)
+                    scans=sim.scans, wall_s=wall, timed_out=timed_out, fault=fault, before=before)
     res.stats = bus.stats(res.t_start_ns, max(res.t_end_ns, res.t_start_ns))
     return res
 
@@ -349,6 +383,8 @@ def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s) -
     from linmot_st.bus.stats import bus_stats
     from linmot_st.cosim import CoSimTimeout, RealTimeCoSim
 
+    from .verify import drive_state
+
     spec = opts.bus
     if spec == "virtual":
         spec = f"virtual:linmot-st-commission-{os.getpid()}"
@@ -369,6 +405,7 @@ def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s) -
             for n in nodes:
                 drive_buses.append(opened())
                 drives[n] = factory(n)
+        before = {n: drive_state(d) for n, d in drives.items()}
         plc_bus = _RecordingBus(opened(), time.monotonic_ns(), bit_ns)
         for b, d in zip(drive_buses, drives.values()):
             d.attach(b)                                  # switched on now: boots after its boot time
@@ -401,6 +438,6 @@ def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s) -
     trace = sorted(plc_bus.records, key=lambda r: r.end_ns)
     res = RunResult(opts, nodes, plc.tick_ns, bit_ns, sampler.axes, trace, drives, scans=sim.scans,
                     wall_s=wall, timed_out=timed_out, fault=fault, overruns=sim.overruns,
-                    max_lateness_ns=sim.max_lateness_ns)
+                    max_lateness_ns=sim.max_lateness_ns, before=before)
     res.stats = bus_stats(trace, bit_ns, res.t_start_ns, max(res.t_end_ns, res.t_start_ns))
     return res

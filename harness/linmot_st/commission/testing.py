@@ -55,7 +55,7 @@ def commission(backend: str = "auto", pvl=None, **kw) -> Outcome:
     from linmot_st.pvl.dataset import from_pvl
     from .report import Context, Report
     from .runner import RunOptions, run
-    from .verify import verify
+    from .verify import verify_run
 
     pvl = pvl or example()
     hooks = {k: kw.pop(k) for k in ("drive_factory", "prepare_bus", "prepare_plc", "progress") if k in kw}
@@ -64,9 +64,10 @@ def commission(backend: str = "auto", pvl=None, **kw) -> Outcome:
     opts = RunOptions(**kw)
     res = project_build(backend)
     result = run(pvl, opts, res, **hooks)
-    verification = verify(pvl, result.drives, opts)
+    verification = verify_run(pvl, result)
     ds = from_pvl(pvl)
-    ctx = Context(str(EXAMPLE.relative_to(REPO)), "test", res.backend, 0.0, True, "plc_project/plc.st", ds.words)
+    path = str(EXAMPLE.relative_to(REPO)) if pvl.filename is None or Path(pvl.filename) == EXAMPLE else pvl.filename
+    ctx = Context(path, f"linmot-st commission {path} (test run)", res.backend, 0.0, True, "plc_project/plc.st", ds.words)
     report = Report(ctx, result, ds, verification, pvl)
     report.compute()
     return Outcome(pvl, result, verification, report)

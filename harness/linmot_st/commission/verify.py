@@ -6,6 +6,11 @@ types sign-extended); RAM where it must already hold the value (after a reset, o
 RAM+ROM), and otherwise RAM as information (it takes the ROM value at the next firmware start); the
 curves and the command table in RAM, and in flash when the flash save was asked. A PVL without curves (or
 without command-table entries) leaves that part of the drive as it was, so it is not compared.
+
+A drive whose run stopped in the compatibility check must hold what it held when it was switched on: the
+FB writes nothing before every layer passed. Then that is what is checked (`drive_state` before and after),
+and the report says "nothing written" instead of listing every PVL item the drive does not have; if the
+drive did change, the full comparison is made as well.
 """
 
 from __future__ import annotations
@@ -117,8 +122,48 @@ def _first_difference(exp, act) -> str:
     return f"block differs from byte {k} ({act[k:k + 1].hex() or '-'} vs {exp[k:k + 1].hex() or '-'})"
 
 
-def verify(pvl, drives: dict, opts) -> Verification:
-    """Compare each emulated drive with the PVL content (see the module docstring)."""
+def drive_state(drive) -> dict:
+    """What commissioning can change in an emulated drive: every parameter's ROM and RAM, the curves and the
+    command table in RAM and flash, the blocks being written (compared before and after a run)."""
+    return dict(params={p.upid: (p.rom, p.ram) for p in drive.params if p.kind == "par"},
+                curves_ram=dict(drive.curves.ram), curves_flash=dict(drive.curves.flash),
+                curves_in_progress=drive.curves.in_progress(),
+                ct_ram=dict(drive.ct.ram), ct_flash=dict(drive.ct.flash))
+
+
+def state_changes(before: dict, after: dict) -> list[str]:
+    """What differs between two drive_state()s, in words."""
+    out = []
+    for upid in sorted(set(before["params"]) | set(after["params"])):
+        b, a = before["params"].get(upid), after["params"].get(upid)
+        if b != a:
+            out.append(f"{upid:04X}h: ROM/RAM {b} before, {a} after")
+    names = {"curves_ram": "curves RAM", "curves_flash": "curves flash", "ct_ram": "command table RAM",
+             "ct_flash": "command table flash"}
+    for key, name in names.items():
+        b, a = before[key], after[key]
+        for k in sorted(set(b) | set(a)):
+            if b.get(k) != a.get(k):
+                out.append(f"{name} {k}: " + ("added" if k not in b else "deleted" if k not in a else "changed"))
+    if before["curves_in_progress"] != after["curves_in_progress"]:
+        out.append(f"curves being written: {after['curves_in_progress']}")
+    return out
+
+
+def _unchanged(node: int, before: dict, after: dict) -> Check:
+    changes = state_changes(before, after)
+    size = lambda s: len(s["params"]) + sum(len(s[k]) for k in ("curves_ram", "curves_flash", "ct_ram", "ct_flash"))  # noqa: E731
+    c = Check(node, "drive unchanged", checked=size(before), equal=size(before) - len(changes))
+    for line in changes:
+        _add(c, line)
+    return c
+
+
+def verify(pvl, drives: dict, opts, *, before: dict | None = None, stopped_in_check: set[int] = frozenset()
+           ) -> Verification:
+    """Compare each emulated drive with the PVL content (see the module docstring). `before`: drive_state()
+    of each node when it was switched on; `stopped_in_check`: nodes whose FB failed in the compatibility
+    check (nothing may have been written to them)."""
     v = Verification()
     if not drives:
         v.skipped = "real drives: verified only by the PLC's own VERIFY phase"
@@ -127,17 +172,32 @@ def verify(pvl, drives: dict, opts) -> Verification:
     entries = {e.entry_id: e.data for e in pvl.command_table}
     has_params = any(obj.parameters for obj in pvl.parameter_objects)
     for node, drive in sorted(drives.items()):
+        if node in stopped_in_check and before and node in before:
+            same = _unchanged(node, before[node], drive_state(drive))
+            v.checks.append(same)
+            if same.ok:
+                same.note = "nothing written (as intended: the run stopped in the compatibility check)"
+                continue
+            same.note = "the run stopped in the compatibility check, yet the drive changed"
         if has_params:
             v.checks += _params(pvl, drive, node, opts)
-        stores = [("RAM", True)] + ([("flash", True)] if opts.flash else [])
+        stores = ["RAM", "flash"] if opts.flash else ["RAM"]
         if curves:
-            for name, _ in stores:
+            for name in stores:
                 have = drive.curves.ram if name == "RAM" else drive.curves.flash
                 actual = {cid: (c.info, c.setpoints) for cid, c in have.items()}
                 v.checks.append(_blocks(node, f"curves {name}", curves, actual, lambda k: f"curve {k}"))
         if entries:
-            for name, _ in stores:
+            for name in stores:
                 have = drive.ct.ram if name == "RAM" else drive.ct.flash
                 v.checks.append(_blocks(node, f"command table {name}", entries, dict(have),
                                         lambda k: f"entry {k}"))
     return v
+
+
+def verify_run(pvl, result) -> Verification:
+    """verify() for a runner.RunResult: its emulated drives, their state when switched on, and the axes whose
+    FB stopped in the compatibility check."""
+    opts = result.options
+    stopped = {a.node_id for a in result.axes if a.error and a.fail_phase == "check"}
+    return verify(pvl, result.drives if opts.emulate else {}, opts, before=result.before, stopped_in_check=stopped)
