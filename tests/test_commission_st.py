@@ -46,3 +46,27 @@ def test_matiec_rules():
     for f in sorted((REPO / "plc_project").glob("*.st")):
         code = re.sub(r"\(\*.*?\*\)", "", f.read_text(), flags=re.S)
         assert not re.search(r"\bFOR\b", code)
+
+
+def test_pvl_docs_and_help_name_every_module_and_command(capsys):
+    """docs/pvl.md's module table lists every module of linmot_st.pvl (dataset.py and to_st.py included), and
+    `linmot-st pvl --help` every command."""
+    import pytest
+
+    from linmot_st.cli import main
+    from linmot_st.pvl.cli import COMMANDS
+
+    table = (REPO / "docs" / "pvl.md").read_text().split("## Modules", 1)[1]
+    for module in sorted((REPO / "harness" / "linmot_st" / "pvl").glob("*.py")):
+        if module.name != "__init__.py":
+            assert f"| `{module.name}` |" in table, module.name
+    assert "will be one more entry" not in (REPO / "docs" / "pvl.md").read_text()
+    with pytest.raises(SystemExit):
+        main(["pvl", "--help"])
+    help_text = capsys.readouterr().out
+    for name, *_ in COMMANDS:
+        assert f"    {name} " in help_text, name
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    top = " ".join(capsys.readouterr().out.split())
+    assert "LinMot PVL files: show a summary, generate the PLC's dataset (to-st)" in top

@@ -1,7 +1,9 @@
 """`linmot-st pvl ...`: commands on PVL files.
 
-Each command is one entry of `COMMANDS`: (name, module-level function that adds its arguments, function
-that runs it). `pvl to-st` (ST data for the PLC) is added here by the ST data generator, as one more entry.
+    linmot-st pvl show FILE [-v]            a readable summary (errors as file:line messages)
+    linmot-st pvl to-st FILE -o OUT.st      the commissioning dataset as ST data for the PLC (to_st.py)
+
+Each command is one entry of `COMMANDS`: (name, function that adds its arguments, function that runs it).
 """
 
 from __future__ import annotations
@@ -51,7 +53,7 @@ COMMANDS = [
 
 
 def register(subparsers) -> None:
-    parser = subparsers.add_parser("pvl", help="LinMot PVL files: show, ...",
+    parser = subparsers.add_parser("pvl", help="LinMot PVL files: show a summary, generate the PLC's dataset (to-st)",
                                    description="Commands on LinMot PVL (Parameter Value List) files.")
     sub = parser.add_subparsers(dest="pvl_command", metavar="PVL_COMMAND")
     for name, help_text, add_arguments, run in COMMANDS:
