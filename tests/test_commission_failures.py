@@ -349,6 +349,16 @@ def test_no_flash_is_accepted_where_it_can_work(no_build, tmp_path, pvl, args):
     assert (tmp_path / "new" / "folder").is_dir()                   # created before the build
 
 
+def test_no_flash_without_reset_commissions_a_curve(capsys):
+    """The combination the command accepts does work: the curve is written to RAM and read back (and the
+    report counts in the singular)."""
+    assert main(["commission", str(SEED_CURVE), "-q", "--drive-timings", "fast", "--no-flash", "--no-reset"]) == 0
+    out = capsys.readouterr().out
+    assert "  dataset: 0 layers, 0 parameters, 1 curve (10 setpoints), 0 command-table entries = 35 words" in out
+    assert "curve 23 'Example_Curve', 10 setpoints: node 1 read back = written" in out
+    assert "result: PASSED (1 axis commissioned and verified)" in out
+
+
 def test_a_report_folder_that_cannot_be_written_after_the_run(tmp_path, capsys):
     """The result is printed first; the failed write is an error message and exit status 1, no traceback."""
     report = tmp_path / "r"
