@@ -13,9 +13,8 @@ import pytest
 from linmot_st.bus.bits import bus_bits, unstuffed_bus_bits
 from linmot_st.cli import main
 from linmot_st.pvl.dataset import INFO_WORDS
-from linmot_st.commission.testing import EXAMPLE, commission, example, use_local_matiec
+from linmot_st.commission.testing import EXAMPLE, commission, example
 
-use_local_matiec()                                   # before BACKEND_PARAMS looks for iec2c
 
 from linmot_st.toolchain.testing import BACKEND_PARAMS  # noqa: E402
 

@@ -12,10 +12,9 @@ import pytest
 
 from linmot_st.cli import main
 from linmot_st.pvl import dataset as dsf
-from linmot_st.commission.testing import EXAMPLE, commission, example, use_local_matiec
+from linmot_st.commission.testing import EXAMPLE, commission, example
 from linmot_st.emulator import DriveTimings, E1100Drive, load_profile
 
-use_local_matiec()
 
 PVL = example()
 WORDS = dsf.encode(PVL)

@@ -7,11 +7,10 @@ from __future__ import annotations
 import pytest
 
 from linmot_st.commission.project import INSTANCE, MAILBOX
-from linmot_st.commission.testing import project_build, use_local_matiec
+from linmot_st.commission.testing import project_build
 from test_stlib_plcopen import (assert_exclusive, check_rising_edge_after_the_pulse, check_toggled_execute, outputs,
                                 requests, run_recording)
 
-use_local_matiec()
 
 MS = 1_000_000
 INPUTS = {"EXECUTE": "START", "ABORT": "ABORT", "LIVERAM": "LIVERAM", "FLASH": "FLASH", "RESET": "RESET",

@@ -48,10 +48,6 @@ CONFIGURATION Config0
 END_CONFIGURATION
 """
 
-if not os.environ.get("IEC2C") and not os.environ.get("MATIEC_HOME") and Path("/opt/matiec-src/iec2c").exists():
-    os.environ["MATIEC_HOME"] = "/opt/matiec-src"     # this machine's hand-built MatIEC (never in the repo)
-
-
 def _backends():
     from linmot_st import toolchain
     return [pytest.param("builtin", marks=pytest.mark.skipif(not toolchain.builtin_available(),

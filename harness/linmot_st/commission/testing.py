@@ -15,12 +15,6 @@ _builds: dict[str, Any] = {}
 
 
 
-def use_local_matiec() -> None:
-    """For the test modules: the development machines' MatIEC, built by hand in /opt/matiec-src (never in the
-    repository), unless IEC2C or MATIEC_HOME says otherwise. Tests skip MatIEC where it is absent."""
-    if not os.environ.get("IEC2C") and not os.environ.get("MATIEC_HOME") and Path("/opt/matiec-src/iec2c").exists():
-        os.environ["MATIEC_HOME"] = "/opt/matiec-src"
-
 
 def example():
     from linmot_st.pvl import load_pvl
