@@ -208,3 +208,38 @@ def test_endpoint_latency_and_next_event():
     assert bus.next_event_ns() is None
     plc.send(REQ, 0)
     assert bus.next_event_ns() == 50_000
+
+
+@pytest.mark.parametrize("order", ["attach-then-power_on", "power_on-then-attach"])
+def test_node_changed_outside_the_bus_is_served_in_either_order(order):
+    # a drive powered on after it was attached must boot like one powered on first (its timer is read
+    # again by run_until, not only when the bus calls the node)
+    from linmot_st.emulator import E1100Drive
+
+    bus = SimBus()
+    drive = E1100Drive(1)
+    if order == "attach-then-power_on":
+        bus.attach(drive, "drive")
+        drive.power_on(0)
+    else:
+        drive.power_on(0)
+        bus.attach(drive, "drive")
+    plc = bus.endpoint("plc")
+    bus.run_until(6_000_000_000)
+    boot = Frame(0x701, b"\x00")
+    assert plc.receive() == [(drive.timings.boot_ns + length_ns(boot), boot)]
+    assert drive.nmt_state == "PRE-OPERATIONAL"
+
+
+def test_node_powered_on_while_the_bus_runs():
+    from linmot_st.emulator import E1100Drive
+
+    bus = SimBus()
+    drive = E1100Drive(1)
+    bus.attach(drive, "drive")
+    plc = bus.endpoint("plc")
+    bus.run_until(1_000_000_000)
+    drive.power_on(bus.now)
+    bus.run_until(6_000_000_000)
+    boot = Frame(0x701, b"\x00")
+    assert plc.receive() == [(1_000_000_000 + drive.timings.boot_ns + length_ns(boot), boot)]

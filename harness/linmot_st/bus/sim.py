@@ -13,7 +13,9 @@ frames a node returns get its latency added to their ready times.
 Order of events at one instant: frame end (delivery), scheduled actions, node timers, then
 arbitration, so a frame made ready by any of the first three at T still competes at T.
 `run_until(t)` processes everything up to t except a transmission start at exactly t: that one is
-decided when time moves on, so frames an endpoint sends at t (the PLC's scan time) join it.
+decided when time moves on, so frames an endpoint sends at t (the PLC's scan time) join it. It first
+asks every node for its next_timer_ns() again, so a node changed from outside between two calls (a
+drive powered on after it was attached) is served from that call on.
 """
 
 from __future__ import annotations
@@ -41,10 +43,12 @@ class TraceEntry(NamedTuple):
 class _Part:
     """A participant's state on the bus."""
 
-    __slots__ = ("name", "node", "latency", "queue", "timer", "order", "tec", "bus_off", "sent", "discarded")
+    __slots__ = ("name", "node", "latency", "queue", "timer", "order", "tec", "bus_off", "sent", "discarded",
+                 "has_timer")
 
     def __init__(self, name: str, node: Any, latency: int, order: int) -> None:
         self.name, self.node, self.latency, self.order = name, node, latency, order
+        self.has_timer = not isinstance(node, Endpoint)   # an endpoint never has a timer
         self.queue: list[tuple[int, int, Frame]] = []    # (ready_ns, seq, frame), sorted
         self.timer: int | None = None
         self.tec = 0
@@ -275,6 +279,13 @@ class SimBus:
             raise ValueError(f"run_until({t_end}): bus time is already {self.now} ns")
         parts = self._parts
         actions = self._actions
+        # A node may have been changed from outside since the bus last called it (attach, then
+        # power_on(0)): read every timer again, so that the order of such calls does not matter.
+        now = self.now
+        for p in parts:
+            if p.has_timer:
+                t = p.node.next_timer_ns()
+                p.timer = None if t is None else (t if t > now else now)
         while True:
             tx = self._tx
             # the earliest event; ties go to the first kind checked
