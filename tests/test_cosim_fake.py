@@ -228,3 +228,17 @@ def test_real_time_cosim_step_paces_scans():
         sim.step(11)
         assert time.monotonic() - t0 >= 0.049
         assert sim.scans == 11 and plc.time_ns == 55_000_000
+
+
+@pytest.mark.parametrize("count", [33, 100, -1])
+def test_tx_count_outside_the_mailbox_is_an_error(count):
+    # no driver could send Tx[33..]: an error that names the mailbox and the count, not a silent truncation
+    def program(plc):
+        plc.tx(Frame(0x601, b"\x01"))
+        plc[f"{MB}.TXCOUNT"] = count
+    plc = FakePlc(program)
+    bus = SimBus()
+    sim = CoSim(plc, bus, mailbox=MB)
+    with pytest.raises(CoSimError, match=rf"{re.escape(MB)}\.TxCount = {count}: outside 0\.\.32"):
+        sim.step(1)
+    assert bus.trace == [] and plc[f"{MB}.TXCOUNT"] == 0

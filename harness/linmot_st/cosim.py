@@ -6,7 +6,8 @@ PLC time t:
   2. the frames the PLC's endpoint received since the previous scan go into Rx[1..RxCount], in
      delivery order; beyond 32 the rest are dropped and counted in RxLost (as a PLC CAN driver does);
   3. plc.step(1);
-  4. Tx[1..TxCount] are sent in order, ready at t, and TxCount is set to 0.
+  4. Tx[1..TxCount] are sent in order, ready at t, and TxCount is set to 0 (a TxCount outside 0..32, or
+     a Tx frame with Id > 16#7FF or Dlc > 8, raises CoSimError: no CAN driver could send it).
 `RealTimeCoSim` does the same on a python-can bus against the wall clock (`linmot-st commission
 --bus virtual|socketcan:CHANNEL`): scan k starts at the wall time of the PLC's clock, and the frames
 received until then go into Rx.
@@ -98,13 +99,16 @@ class Mailbox:
         return slot
 
     def take_tx(self) -> list[Frame]:
-        """The frames Tx[1..TxCount], then TxCount := 0. Empty list if TxCount <= 0."""
+        """The frames Tx[1..TxCount], then TxCount := 0. A TxCount outside 0..32 raises CoSimError: the
+        PLC program wrote past its Tx array (no driver would send those frames, and none was counted in
+        TxLost)."""
         n = self._tx_count.value
-        if n <= 0:
-            if n < 0:
-                self._tx_count.value = 0
+        if n == 0:
             return []
-        n = min(n, MAILBOX_FRAMES)
+        if not 0 < n <= MAILBOX_FRAMES:
+            self._tx_count.value = 0
+            raise CoSimError(f"{self.path}.TxCount = {n}: outside 0..{MAILBOX_FRAMES} (Tx holds "
+                             f"{MAILBOX_FRAMES} frames; a full Tx is counted in TxLost, not in TxCount)")
         frames = []
         tx = self._tx
         for i in range(1, n + 1):
