@@ -112,3 +112,23 @@ def test_socketcan_vcan0():
             client.send(can.Message(arbitration_id=0x601, data=b"\x01\x02", is_extended_id=False))
             reply = recv_until(client, lambda m: m.arbitration_id == 0x581)
             assert reply is not None and bytes(reply.data) == b"\x01\x02"
+
+
+def test_parse_bus_spec_is_the_rule_open_bus_and_commission_share():
+    from linmot_st.bus import parse_bus_spec
+    from linmot_st.commission.runner import check_bus_spec
+
+    assert parse_bus_spec("virtual") == ("virtual", "linmot-st")
+    assert parse_bus_spec("Virtual:run1") == ("virtual", "run1")
+    assert parse_bus_spec("socketcan:vcan0") == ("socketcan", "vcan0")
+    assert parse_bus_spec("pcan:PCAN_USBBUS1") == ("pcan", "PCAN_USBBUS1")
+    for bad, message in [("udp_multicast:239.0.0.1", "udp_multicast interface is not supported"),
+                         ("socketcan", "needs a channel"), (":x", "expected"),
+                         ("nosuch:x", "python-can has no interface 'nosuch'")]:
+        with pytest.raises(ValueError, match=message):
+            parse_bus_spec(bad)
+        with pytest.raises(ValueError, match=message):           # open_bus refuses before opening anything
+            open_bus(bad)
+        with pytest.raises(ValueError, match=f"--bus '{bad}': "):   # the commission check: same rule
+            check_bus_spec(bad)
+    check_bus_spec("sim")

@@ -9,9 +9,9 @@ in ns since start(). ``E1100Drive.attach(bus)`` / ``detach()`` wrap exactly that
 from .bits import bus_bits, frame_length_bits, stuff_bit_count
 from .faults import Fault, flip_bit, match_id, with_data
 from .frame import Frame
-from .pycan import NodeServer, open_bus
+from .pycan import NodeServer, open_bus, parse_bus_spec
 from .sim import Endpoint, SimBus, TraceEntry
 from .stats import BusStats
 
 __all__ = ["Frame", "SimBus", "Endpoint", "TraceEntry", "BusStats", "Fault", "NodeServer", "open_bus",
-           "bus_bits", "frame_length_bits", "stuff_bit_count", "flip_bit", "match_id", "with_data"]
+           "parse_bus_spec", "bus_bits", "frame_length_bits", "stuff_bit_count", "flip_bit", "match_id", "with_data"]

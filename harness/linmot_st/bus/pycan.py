@@ -147,22 +147,43 @@ class NodeServer:
                 self._fail(exc)
 
 
+DEFAULT_VIRTUAL_CHANNEL = "linmot-st"
+
+
+def parse_bus_spec(spec: str, *, where: str | None = None,
+                   forms: str = "virtual[:CHANNEL] or INTERFACE:CHANNEL") -> tuple[str, str]:
+    """Check a bus spec without opening anything and return (interface, channel).
+
+    ``virtual`` or ``virtual:CHANNEL`` (default channel "linmot-st"), ``socketcan:CHANNEL``, or
+    ``INTERFACE:CHANNEL`` for any interface python-can knows, except ``udp_multicast`` (its traffic
+    leaves the machine). Raises ValueError whose message reads ``<where>: <problem>`` (`where`
+    defaults to ``bus spec '<spec>'``); `forms` names the accepted forms in that message (a caller
+    may accept more, such as ``sim``).
+    """
+    interface, _, channel = spec.partition(":")
+    interface, channel = interface.strip().lower(), channel.strip()
+    where = where or f"bus spec {spec!r}"
+    if not interface or (interface != "virtual" and not channel):
+        raise ValueError(f"{where}: expected {forms} such as socketcan:can0 "
+                         f"(an interface other than virtual needs a channel)")
+    if interface == "udp_multicast":
+        raise ValueError(f"{where}: the udp_multicast interface is not supported: its traffic leaves the machine")
+    from can.interfaces import VALID_INTERFACES
+
+    if interface not in VALID_INTERFACES:
+        known = sorted(set(VALID_INTERFACES) - {"udp_multicast"})
+        raise ValueError(f"{where}: python-can has no interface {interface!r} (it has {', '.join(known)})")
+    return interface, channel or DEFAULT_VIRTUAL_CHANNEL
+
+
 def open_bus(spec: str, *, bitrate: int = 500_000, **kwargs: Any):
-    """Open a python-can Bus from a short spec: ``virtual``, ``virtual:CHANNEL``, ``socketcan:CHANNEL``,
-    or ``INTERFACE:CHANNEL`` for any python-can interface (never ``udp_multicast`` here: its traffic
-    leaves the machine)."""
+    """Open a python-can Bus from a short spec (parse_bus_spec): ``virtual``, ``virtual:CHANNEL``,
+    ``socketcan:CHANNEL``, or ``INTERFACE:CHANNEL``. ValueError for a bad spec; opening may raise
+    can.CanError or OSError (no such adapter or interface). The bit rate of a SocketCAN interface is
+    set with `ip link`, so `bitrate` is not passed to it."""
     import can
 
-    interface, _, channel = spec.partition(":")
-    interface = interface.strip().lower()
-    if not interface:
-        raise ValueError(f"bad bus spec {spec!r}: expected INTERFACE[:CHANNEL], e.g. virtual or socketcan:vcan0")
-    if interface == "udp_multicast":
-        raise ValueError("the udp_multicast interface is not supported: its traffic leaves the machine")
-    if interface == "virtual":
-        return can.Bus(interface="virtual", channel=channel or "linmot-st", **kwargs)
-    if not channel:
-        raise ValueError(f"bad bus spec {spec!r}: interface {interface} needs a channel, e.g. {interface}:can0")
-    if interface == "socketcan":  # the bit rate of a SocketCAN interface is set with `ip link`, not here
-        return can.Bus(interface="socketcan", channel=channel, **kwargs)
+    interface, channel = parse_bus_spec(spec)
+    if interface in ("virtual", "socketcan"):
+        return can.Bus(interface=interface, channel=channel, **kwargs)
     return can.Bus(interface=interface, channel=channel, bitrate=bitrate, **kwargs)

@@ -38,21 +38,9 @@ def check_bus_spec(spec: str) -> None:
     whether the bus exists is known only when it is opened."""
     if spec == "sim":
         return
-    interface, _, channel = spec.partition(":")
-    interface = interface.strip().lower()
-    if not interface:
-        raise ValueError(f"--bus {spec!r}: expected sim, virtual[:CHANNEL], socketcan:CHANNEL or INTERFACE:CHANNEL")
-    if interface == "udp_multicast":
-        raise ValueError("--bus udp_multicast: not supported, its traffic leaves the machine")
-    if interface == "virtual":
-        return
-    if not channel:
-        raise ValueError(f"--bus {spec!r}: expected sim, virtual[:CHANNEL], or INTERFACE:CHANNEL such as "
-                         "socketcan:can0 (an interface other than virtual needs a channel)")
-    from can.interfaces import VALID_INTERFACES
-    if interface not in VALID_INTERFACES:
-        known = sorted(set(VALID_INTERFACES) - {"udp_multicast"})
-        raise ValueError(f"--bus {spec!r}: python-can has no interface {interface!r} (it has {', '.join(known)})")
+    from linmot_st.bus.pycan import parse_bus_spec
+
+    parse_bus_spec(spec, where=f"--bus {spec!r}", forms="sim, virtual[:CHANNEL], or INTERFACE:CHANNEL")
 
 
 @dataclass
