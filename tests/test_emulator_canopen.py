@@ -214,9 +214,3 @@ def test_emulate_cli_serves_on_a_virtual_bus():
         t.join(5)
         raw.shutdown()
     assert rc == [0]
-
-
-def test_emulate_cli_refuses_udp_multicast():
-    from linmot_st.cli import main
-    with pytest.raises(SystemExit):
-        main(["emulate", "--interface", "udp_multicast", "--channel", "x", "--duration", "0"])

@@ -3,50 +3,86 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 
 def register(subparsers) -> None:
     p = subparsers.add_parser(
         "emulate", help="serve an emulated LinMot E1100 (CANopen) on a python-can bus",
         description="Serve an emulated LinMot E1100 CANopen drive on any python-can bus in real time, "
-                    "e.g. --interface socketcan --channel vcan0, until Ctrl-C.")
+                    "e.g. --interface socketcan --channel vcan0, until Ctrl-C or SIGTERM.")
     p.add_argument("--interface", required=True, help="python-can interface (socketcan, virtual, pcan, ...)")
     p.add_argument("--channel", required=True, help="python-can channel (vcan0, can0, a virtual channel name)")
     p.add_argument("--node-id", type=int, default=1, help="CANopen node ID 1..127 (default 1)")
-    p.add_argument("--bitrate", type=int, default=500_000, help="bit rate in bit/s (default 500000, the E1100 default)")
+    p.add_argument("--bitrate", type=int, default=500_000,
+                   help="bit rate in bit/s (default 500000, the E1100 default; SocketCAN: set with `ip link`)")
     p.add_argument("--profile", help="drive profile JSON (default: the seeds' example drive)")
     p.add_argument("--fast", action="store_true", help="short boot/MC/flash durations (for demos and tests)")
     p.add_argument("--duration", type=float, help="stop after this many seconds (default: until interrupted)")
     p.set_defaults(func=run)
 
 
+def _error(message: str, rc: int) -> int:
+    print(f"error: {message}", file=sys.stderr, flush=True)
+    return rc
+
+
 def run(args: argparse.Namespace) -> int:
+    """Exit status 0 when stopped (duration, Ctrl-C, SIGTERM), 2 for bad arguments, 1 when the bus
+    cannot be opened or the drive fails while serving."""
+    import signal
+    import threading
     import time
 
     import can
 
+    from ..bus import open_bus, parse_bus_spec
     from .drive import DriveTimings, E1100Drive
-    from .profile import load_profile
+    from .profile import ProfileError, load_profile
 
-    if args.interface == "udp_multicast":
-        raise SystemExit("emulate: the udp_multicast interface is not supported (its traffic leaves the machine)")
-    if not 1 <= args.node_id <= 127:
-        raise SystemExit(f"emulate: node ID {args.node_id} is outside 1..127")
-    profile = load_profile(args.profile) if args.profile else None
+    spec = f"{args.interface}:{args.channel}"
+    try:
+        if not 1 <= args.node_id <= 127:
+            raise ValueError(f"--node-id {args.node_id}: outside 1..127")
+        if args.bitrate <= 0:
+            raise ValueError(f"--bitrate {args.bitrate}: must be a positive number of bit/s")
+        if args.duration is not None and args.duration < 0:
+            raise ValueError(f"--duration {args.duration}: must be >= 0")
+        parse_bus_spec(spec, where=f"--interface {args.interface} --channel {args.channel}")
+        profile = load_profile(args.profile) if args.profile else None
+    except ProfileError as exc:
+        return _error(f"--profile {exc}", 2)
+    except OSError as exc:
+        return _error(f"--profile {args.profile}: {exc.strerror or exc}", 2)
+    except ValueError as exc:
+        return _error(str(exc), 2)
     drive = E1100Drive(args.node_id, profile, DriveTimings.fast() if args.fast else None)
-    kwargs = {} if args.interface == "socketcan" else {"bitrate": args.bitrate}  # SocketCAN: set with `ip link`
-    bus = can.Bus(interface=args.interface, channel=args.channel, **kwargs)
+    try:
+        bus = open_bus(spec, bitrate=args.bitrate)
+    except (can.CanError, OSError, ValueError, ImportError) as exc:
+        return _error(f"cannot open {args.interface} channel {args.channel}: {exc}", 1)
+
+    stop = threading.Event()
+    old_handler = None
+    if threading.current_thread() is threading.main_thread():   # signal handlers live in the main thread only
+        old_handler = signal.signal(signal.SIGTERM, lambda signum, frame: stop.set())
     print(f"E1100 node {args.node_id} on {args.interface}:{args.channel} "
           f"(boot-up after {drive.timings.boot_ns / 1e9:g} s); Ctrl-C stops", flush=True)
-    drive.attach(bus)
+    rc = 0
     try:
+        drive.attach(bus)
         deadline = None if args.duration is None else time.monotonic() + args.duration
-        while deadline is None or time.monotonic() < deadline:
-            time.sleep(0.05 if deadline is None else max(0.0, min(0.05, deadline - time.monotonic())))
+        while not stop.is_set() and (deadline is None or time.monotonic() < deadline):
+            stop.wait(0.05 if deadline is None else max(0.0, min(0.05, deadline - time.monotonic())))
     except KeyboardInterrupt:
         pass
     finally:
-        drive.detach()
+        try:
+            drive.detach()
+        except RuntimeError as exc:                 # the drive raised while serving
+            rc = _error(str(exc), 1)
         bus.shutdown()
+        if old_handler is not None:
+            signal.signal(signal.SIGTERM, old_handler)
     print(f"E1100 node {args.node_id} stopped in NMT state {drive.nmt_state}", flush=True)
-    return 0
+    return rc

@@ -243,18 +243,18 @@ def load_parameters(path: Path, layer_of) -> list[ParamDef]:
 def load_error_texts(path: Path) -> dict[int, str]:
     texts = {}
     for where, row in _rows(Path(path)):
-        code = int(row["code"], 16)
-        text = row["text"].strip()
+        try:
+            code = int(row["code"], 16)
+            text = row["text"].strip()
+        except (KeyError, ValueError, AttributeError):
+            raise ProfileError(f"{where}: needs code (hex) and text") from None
         if len(text) > 32:
             raise ProfileError(f"{where}: error text longer than 32 characters (8 stringlets)")
         texts[code] = text
     return texts
 
 
-def load_profile(path: str | Path | None = None) -> DriveProfile:
-    """Load a drive profile JSON (default: the seeds' example drive, data/e1100_default.json)."""
-    path = Path(path) if path else DEFAULT_PROFILE
-    spec = json.loads(path.read_text(encoding="utf-8"))
+def _identity_and_layers(spec: dict) -> tuple[Identity, tuple[Layer, ...]]:
     ident = spec.get("identity", {})
     identity = Identity(
         vendor_id=int(str(ident.get("vendor_id", "0x156")), 0),
@@ -272,11 +272,33 @@ def load_profile(path: str | Path | None = None) -> DriveProfile:
         tree_id_upid=int(lay["tree_id_upid"], 16), main_version_upid=int(lay["main_version_upid"], 16),
         sub_version_upid=int(lay["sub_version_upid"], 16),
     ) for lay in spec["layers"])
+    return identity, layers
+
+
+def load_profile(path: str | Path | None = None) -> DriveProfile:
+    """Load a drive profile JSON (default: the seeds' example drive, data/e1100_default.json).
+    A missing file raises OSError; bad content raises ProfileError naming the file."""
+    path = Path(path) if path else DEFAULT_PROFILE
+    try:
+        spec = json.loads(path.read_text(encoding="utf-8"))
+    except json.JSONDecodeError as exc:
+        raise ProfileError(f"{path}:{exc.lineno}: not JSON: {exc.msg}") from None
+    except UnicodeDecodeError:
+        raise ProfileError(f"{path}: not a UTF-8 text file") from None
+    try:
+        identity, layers = _identity_and_layers(spec)
+        parameter_file, error_text_file = spec["parameter_file"], spec.get("error_text_file")
+    except ProfileError:
+        raise
+    except KeyError as exc:
+        raise ProfileError(f"{path}: missing key {exc.args[0]!r}") from None
+    except (TypeError, ValueError, AttributeError) as exc:
+        raise ProfileError(f"{path}: {exc}") from None
     if sorted(lay.number for lay in layers) != [1, 2, 3, 4]:
         raise ProfileError(f"{path.name}: needs the four firmware layers 1..4")
     probe = DriveProfile(identity, layers, ())
-    params = load_parameters(path.parent / spec["parameter_file"], probe.layer_of)
-    texts = load_error_texts(path.parent / spec["error_text_file"]) if spec.get("error_text_file") else {}
+    params = load_parameters(path.parent / parameter_file, probe.layer_of)
+    texts = load_error_texts(path.parent / error_text_file) if error_text_file else {}
     profile = DriveProfile(identity, layers, tuple(params), texts)
     profile.all_definitions()  # validates: no duplicate UPIDs, all in range
     return profile
