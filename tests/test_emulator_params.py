@@ -104,6 +104,16 @@ def test_address_usage_words():
     assert s[0x0539].address_usage == 0x0005
 
 
+def test_types_the_sources_give():
+    # LinRS "get next UPID": UPID 2008h, AU 000Dh, type 000Ah (RADIO_DIR_BIT); LinRS "get parameter type" of
+    # 13A2h: 03h (UINT16)
+    s = store()
+    assert (s[0x2008].type.name, s[0x2008].type.code) == ("RADIO_DIR_BIT", 0x0A)
+    assert (s[0x13A2].type.name, s[0x13A2].type.code) == ("UINT16", 0x03)
+    assert {t.code for t in TYPES.values()} >= {0x00, 0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x08, 0x0A, 0x0B, 0x0C,
+                                                 0x0D, 0x0E}
+
+
 def test_set_layer_default_touches_only_that_layer_rom():
     s = store()
     s.write(0x13A2, 50, ram=True, rom=True)

@@ -50,6 +50,7 @@ TYPES: dict[str, ParamType] = {t.name: t for t in (
     ParamType("UINT32", 0x05, 32, False),
     ParamType("SINT32", 0x06, 32, True),
     ParamType("STRING", 0x08, 0, False),
+    ParamType("RADIO_DIR_BIT", 0x0A, 16, False),   # width INFERRED (as RADIO_DIR16); LinRS types UPID 2008h so
     ParamType("RADIO_DIR16", 0x0B, 16, False),
     ParamType("ENUM_DIR8", 0x0C, 8, False),
     ParamType("ENUM_DIR16", 0x0D, 16, False),
