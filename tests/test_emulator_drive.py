@@ -9,7 +9,7 @@ import pytest
 
 from linmot_st.bus import Frame
 from linmot_st.emulator import (OPERATIONAL, PRE_OPERATIONAL, STOPPED, Curve, DriveTimings, E1100Drive,
-                                build_entry, load_profile)
+                                ProtocolOptions, build_entry, load_profile)
 from linmot_st.emulator.testing import DirectLink
 
 S, MS, US = 1_000_000_000, 1_000_000, 1_000
@@ -189,7 +189,7 @@ def test_mc_stop_start_and_flash_save_policy():
 
 
 def test_state_refusal_can_be_an_abort():
-    link = DirectLink(E1100Drive(1, state_refusal="abort"))
+    link = DirectLink(E1100Drive(1, protocol=ProtocolOptions(save_refusal="abort")))
     assert abort_of(link.sdo(down(0x2000, 0x40))) == 0x08000022
     assert abort_of(link.sdo(down(0x2000, 0x80))) == 0x08000022
 

@@ -12,10 +12,11 @@ from .command_table import CommandTable, build_entry
 from .curves import Curve, CurveStore
 from .drive import BOOTING, OFF, OPERATIONAL, PRE_OPERATIONAL, STOPPED, DriveTimings, E1100Drive
 from .errorlog import ErrorEntry, ErrorLog
+from .options import ProtocolOptions
 from .profile import DriveProfile, ParamDef, ProfileError, load_profile
 
 __all__ = [
-    "E1100Drive", "DriveTimings", "DriveProfile", "ParamDef", "ProfileError", "load_profile",
+    "E1100Drive", "DriveTimings", "ProtocolOptions", "DriveProfile", "ParamDef", "ProfileError", "load_profile",
     "Curve", "CurveStore", "CommandTable", "build_entry", "ErrorLog", "ErrorEntry", "SdoAbort",
     "OFF", "BOOTING", "PRE_OPERATIONAL", "OPERATIONAL", "STOPPED",
 ]

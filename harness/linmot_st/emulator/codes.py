@@ -1,5 +1,7 @@
 """The numbers the drive answers with: E1100 result codes (byte 6 of a 60h download response, byte 4 of some
-upload responses) and the CiA 301 SDO abort codes the emulator uses. docs/emulator.md says when each is sent."""
+upload responses) and the CiA 301 SDO abort codes the emulator uses, and the conditions the curve and
+command-table stores report for a read step (the SDO layer turns them into answers according to the
+ProtocolOptions). docs/emulator.md says when each is sent."""
 
 from __future__ import annotations
 
@@ -63,3 +65,11 @@ class SdoAbort(Exception):
     def __init__(self, code: int, reason: str = ""):
         super().__init__(f"SDO abort {code:08X}h ({ABORT_NAMES.get(code, 'unknown')}){': ' + reason if reason else ''}")
         self.code = code
+
+
+class NotStarted(Exception):
+    """A read step (61h/62h, 86h) without the start that opens the block (60h, 85h)."""
+
+
+class NoMoreData(Exception):
+    """A read step after the end of the block."""

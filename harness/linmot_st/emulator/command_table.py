@@ -1,8 +1,8 @@
 """Command table: 256 entries of 64 bytes in RAM and in flash (seeds chapter 6; spec 2.2, 3.5).
 
-E1100 transfers an entry in 2-byte steps: `prepare` (83h, block size 64) then `write` (84h) 32 times; the entry
-becomes present when the 64th byte arrives and its version word is A701h. Reading: `get` (85h) returns the
-block size and rewinds the read cursor, `read` (86h) returns 2 bytes with a result code per step.
+E1100 transfers an entry in 2-byte steps (the protocol options allow 4): `prepare` (83h, block size 64) then
+`write` (84h) until 64 bytes arrived; the entry becomes present then, if its version word is A701h. Reading:
+`get` (85h) returns the block size and rewinds the read cursor, `read` (86h) the next bytes with a result.
 """
 
 from __future__ import annotations
@@ -10,6 +10,7 @@ from __future__ import annotations
 import struct
 
 from . import codes
+from .codes import NoMoreData, NotStarted
 
 ENTRY_SIZE = 64
 ENTRIES = range(256)
@@ -24,10 +25,6 @@ def build_entry(header: int, params: bytes = b"", *, name: str = "", link: int =
     if len(name) > 15:
         raise ValueError("entry name takes at most 15 characters plus 00h")
     return struct.pack("<HHH32s16s10s", VERSION_ID, link, header, params, name.encode("latin-1"), b"")
-
-
-class NotStarted(Exception):
-    """A read step without a preceding get-entry (85h)."""
 
 
 class CommandTable:
@@ -72,16 +69,17 @@ class CommandTable:
         self._reads[entry] = 0
         return codes.RC_OK, ENTRY_SIZE
 
-    def read(self, entry: int) -> tuple[int, bytes]:
-        """(result, 2 bytes): 04h more to come, 00h the last 2 bytes, D0h already read to the end."""
+    def read(self, entry: int, size: int = 2) -> tuple[int, bytes]:
+        """The next `size` bytes of the entry and the result 04h (more follows) or 00h (that was the last
+        step). NotStarted without an 85h; NoMoreData after the end."""
         pos = self._reads.get(entry)
         if pos is None or entry not in self.ram:
             raise NotStarted(f"CT entry {entry}: no get-entry (85h) before reading")
         if pos >= ENTRY_SIZE:
-            return codes.RC_BLOCK_FINISHED, b"\0\0"
-        self._reads[entry] = pos + 2
-        rc = codes.RC_OK if pos + 2 >= ENTRY_SIZE else codes.RC_NOT_FINISHED
-        return rc, self.ram[entry][pos:pos + 2]
+            raise NoMoreData(f"CT entry {entry}: already read to the end")
+        self._reads[entry] = pos + size
+        rc = codes.RC_OK if pos + size >= ENTRY_SIZE else codes.RC_NOT_FINISHED
+        return rc, self.ram[entry][pos:pos + size]
 
     # ---- delete, presence, flash ----
     def delete(self, entry: int) -> None:

@@ -5,7 +5,7 @@ Writing: `add` (50h) opens a curve with its info and data block sizes; `add_info
 (52h/53h) append 2 or 4 bytes per step. The info block is validated as soon as it is complete; a bad one
 discards the curve and answers a result code. The curve becomes present (readable, saved by a flash save)
 once both blocks are complete. Reading: `get` (60h) returns the sizes and rewinds the read cursors;
-`read_info` (61h) / `read_data` (62h) return 4 bytes per step.
+`read` (61h / 62h) returns the next bytes of a block, as many per step as the protocol options say.
 """
 
 from __future__ import annotations
@@ -14,6 +14,7 @@ import struct
 from dataclasses import dataclass
 
 from . import codes
+from .codes import NoMoreData, NotStarted
 
 INFO_BLOCK_SIZE = 70
 CURVE_IDS = range(1, 101)
@@ -73,14 +74,6 @@ class _Write:
         self.info_size, self.data_size = info_size, data_size
         self.info, self.data = bytearray(), bytearray()
         self.info_ok = False
-
-
-class NotStarted(Exception):
-    """A read step without a preceding start (60h) for this curve."""
-
-
-class NoMoreData(Exception):
-    """A read step after the block's end."""
 
 
 class CurveStore:
@@ -165,23 +158,21 @@ class CurveStore:
         self._reads[cid] = [0, 0]
         return codes.RC_OK, len(c.info), len(c.data)
 
-    def _read(self, cid: int, which: int) -> bytes:
+    def read(self, cid: int, block: str, size: int) -> tuple[int, bytes]:
+        """The next `size` bytes of the "info" or "data" block (the last step padded with 00h) and the result
+        04h (more follows) or 00h (that was the last step). NotStarted without a 60h; NoMoreData after the end."""
         c = self.ram.get(cid)
         cur = self._reads.get(cid)
         if c is None or cur is None:
             raise NotStarted(f"curve {cid}: no get-curve (60h) before reading")
-        block = c.info if which == 0 else c.data
+        which = 0 if block == "info" else 1
+        data = c.info if which == 0 else c.data
         pos = cur[which]
-        if pos >= len(block):
-            raise NoMoreData(f"curve {cid}: {'info' if which == 0 else 'data'} block already read")
-        cur[which] = pos + 4
-        return block[pos:pos + 4].ljust(4, b"\0")
-
-    def read_info(self, cid: int) -> bytes:
-        return self._read(cid, 0)
-
-    def read_data(self, cid: int) -> bytes:
-        return self._read(cid, 1)
+        if pos >= len(data):
+            raise NoMoreData(f"curve {cid}: {block} block already read")
+        cur[which] = pos + size
+        rc = codes.RC_OK if pos + size >= len(data) else codes.RC_NOT_FINISHED
+        return rc, data[pos:pos + size].ljust(size, b"\0")
 
     # ---- delete, flash ----
     def delete_all(self) -> None:

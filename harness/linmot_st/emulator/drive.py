@@ -22,6 +22,7 @@ from .curves import CurveStore
 from .errorlog import ErrorLog
 from .manufacturer import ManufacturerObjects, Reply
 from .mc import SETUP_ERROR, ERROR, MotionControl
+from .options import ProtocolOptions
 from .params import ParameterStore
 from .profile import DriveProfile, load_profile
 from .sdo import Pending, SdoServer
@@ -76,22 +77,20 @@ class E1100Drive:
 
     profile        another parameter set / tree versions / identity (profile.py: load_profile().with_tree(...))
     timings        DriveTimings
-    state_refusal  how a flash save (40h, 80h) with the MC software running is refused: "result" answers the
-                   LinRS state D7h in byte 6 (default), "abort" answers SDO abort 08000022h
+    protocol       ProtocolOptions: the alternatives where the sources leave the frame layout open (the
+                   defaults are what the ST library implements; docs/emulator.md, "Protocol options")
     error_log      a prepared ErrorLog (kept over resets, like the drive's own)
     """
 
     def __init__(self, node_id: int = 1, profile: DriveProfile | None = None, timings: DriveTimings | None = None,
-                 *, state_refusal: str = "result", curve_capacity_bytes: int = 256 * 1024,
+                 *, protocol: ProtocolOptions | None = None, curve_capacity_bytes: int = 256 * 1024,
                  error_log: ErrorLog | None = None):
         if not 1 <= node_id <= 127:
             raise ValueError(f"CANopen node ID {node_id} is outside 1..127")
-        if state_refusal not in ("result", "abort"):
-            raise ValueError("state_refusal is 'result' or 'abort'")
         self.node_id = node_id
         self.profile = profile or load_profile()
         self.timings = timings or DriveTimings()
-        self.state_refusal = state_refusal
+        self.protocol = protocol or ProtocolOptions()
         self.params = ParameterStore(self.profile.all_definitions())
         self.curves = CurveStore(curve_capacity_bytes)
         self.ct = CommandTable()
@@ -375,7 +374,7 @@ class E1100Drive:
 
     def save_to_flash(self, what: str) -> int:
         if self.mc_phase != "stopped":
-            if self.state_refusal == "abort":
+            if self.protocol.save_refusal == "abort":
                 raise SdoAbort(codes.ABORT_STATE, "MC software runs: stop it (35h) before a flash save")
             return codes.RC_MC_NOT_STOPPED
         store = self.curves if what == "curves" else self.ct

@@ -13,9 +13,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 from . import codes
-from .codes import SdoAbort
-from .command_table import NotStarted as CtNotStarted
-from .curves import NoMoreData, NotStarted as CurveNotStarted
+from .codes import NoMoreData, NotStarted, SdoAbort
 from .paramtypes import stringlets_of
 from .params import NoValueAccess, NotWritable, OutOfRange, UnknownUpid
 
@@ -99,6 +97,24 @@ def _words(lo: int, hi: int) -> bytes:
     return struct.pack("<HH", lo & 0xFFFF, hi & 0xFFFF)
 
 
+def read_step(layout: str, read: Callable[[int], tuple[int, bytes]]) -> bytes:
+    """Bytes 4..7 of the answer to a read step (61h/62h, 86h) in `layout` (options.py); `read(n)` returns
+    (result, the next n bytes) from the store or raises NotStarted / NoMoreData."""
+    try:
+        if layout == "data32":
+            try:
+                return read(4)[1]
+            except NoMoreData as exc:      # no room for a result next to 4 data bytes
+                raise SdoAbort(codes.ABORT_NO_DATA, str(exc)) from None
+        try:
+            rc, chunk = read(2)
+        except NoMoreData:
+            rc, chunk = codes.RC_BLOCK_FINISHED, b"\0\0"
+    except NotStarted as exc:
+        raise SdoAbort(codes.ABORT_STATE, str(exc)) from None
+    return bytes([rc, 0]) + chunk if layout == "rc4_data16" else chunk + bytes([rc, 0])
+
+
 class ManufacturerObjects:
     """Dispatch of 2000h..5FFFh onto the drive (`host`: an E1100Drive)."""
 
@@ -119,7 +135,9 @@ class ManufacturerObjects:
             return arg in CURVE_IDS
         if scope == "log":
             return arg in LOG_ENTRIES
-        return 0 <= arg <= 0xFF     # text, ct
+        if scope == "ct":
+            return (0 if self.host.protocol.ct_entry_zero else 1) <= arg <= 0xFF
+        return 0 <= arg <= 0xFF     # text: error codes 00h..FFh
 
     def subs_at(self, index: int) -> list[Service]:
         arg = index - BASE
@@ -162,12 +180,8 @@ class ManufacturerObjects:
             rc, info_size, data_size = h.curves.get(arg)
             return struct.pack("<BBH", rc, info_size, data_size)
         if sub in (0x61, 0x62):
-            try:
-                return h.curves.read_info(arg) if sub == 0x61 else h.curves.read_data(arg)
-            except CurveNotStarted as exc:
-                raise SdoAbort(codes.ABORT_STATE, str(exc)) from None
-            except NoMoreData as exc:
-                raise SdoAbort(codes.ABORT_NO_DATA, str(exc)) from None
+            block = "info" if sub == 0x61 else "data"
+            return read_step(h.protocol.curve_read, lambda n: h.curves.read(arg, block, n))
         if sub == 0x70:
             return _words(len(h.errlog.entries), h.errlog.occurred)
         if sub in (0x71, 0x72, 0x73):
@@ -180,13 +194,16 @@ class ManufacturerObjects:
             return _le(stringlets_of(text, 8)[sub - 0x74])
         if sub == 0x85:
             rc, size = h.ct.get(arg)
-            return struct.pack("<BBH", rc, 0, size)
+            layout = h.protocol.ct_get
+            if layout == "rc4_size6":
+                return struct.pack("<BBH", rc, 0, size)
+            if layout == "size16_rc6":
+                return struct.pack("<HBB", size, rc, 0)
+            if rc != codes.RC_OK:          # size32: no result byte, so an absent entry has no data
+                raise SdoAbort(codes.ABORT_NO_DATA, f"CT entry {arg} is not present")
+            return _le(size)
         if sub == 0x86:
-            try:
-                rc, two = h.ct.read(arg)
-            except CtNotStarted as exc:
-                raise SdoAbort(codes.ABORT_STATE, str(exc)) from None
-            return bytes([rc, 0]) + two
+            return read_step(h.protocol.ct_read, lambda n: h.ct.read(arg, n))
         if 0x87 <= sub <= 0x8E:
             return _le(h.ct.presence(sub - 0x87))
         raise AssertionError(f"no upload handler for sub {sub:02X}h")  # pragma: no cover
@@ -230,7 +247,7 @@ class ManufacturerObjects:
             return Reply(then=h.software_reset)
         if sub in (0x20, 0x22):
             self._list_cursor[sub == 0x22] = hi
-            return codes.RC_NOT_FINISHED   # as the [CO1100] example shows (spec 3.1: DOC-ERR, the table says 00h)
+            return h.protocol.list_start_result   # 04h: the [CO1100] example (its table says 00h: DOC-ERR)
         if sub == 0x35:
             return h.stop_mc()
         if sub == 0x36:
@@ -260,7 +277,9 @@ class ManufacturerObjects:
             h.ct.delete(arg)
             return codes.RC_OK
         if sub == 0x83:
-            return h.ct.prepare(arg, lo)
+            return h.ct.prepare(arg, lo if h.protocol.ct_prepare_size_at == 4 else hi)
         if sub == 0x84:
-            return h.ct.write(arg, data[2:4])
+            layout = h.protocol.ct_write
+            return h.ct.write(arg, data[2:4] if layout == "data16_at6" else data[0:2] if layout == "data16_at4"
+                              else data)
         raise AssertionError(f"no download handler for sub {sub:02X}h")  # pragma: no cover

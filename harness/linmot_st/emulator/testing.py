@@ -88,3 +88,99 @@ class DirectLink:
 
     def nmt(self, command: int, node_id: int | None = None) -> None:
         self.send(Frame(0x000, bytes([command, self.node.node_id if node_id is None else node_id])))
+
+
+class RawSdoClient:
+    """Hand-built frames to one node on a python-can bus (tests against a drive served in real time).
+
+    `exchange(request)` sends an SDO request on 600h+ID and returns the data of the next frame on 580h+ID;
+    other frames received meanwhile are kept for `wait_for`, so a heartbeat or boot-up message that arrives
+    during an exchange is not lost. Timeouts are generous: a loaded machine may delay the server thread.
+    """
+
+    def __init__(self, bus, node_id: int = 1, timeout_s: float = 5.0):
+        self.bus = bus
+        self.node_id = node_id
+        self.timeout_s = timeout_s
+        self.others: list = []          # python-can messages that were not the awaited SDO answer
+
+    def send(self, can_id: int, data: bytes | str) -> None:
+        import can
+
+        self.bus.send(can.Message(arbitration_id=can_id, data=hexbytes(data), is_extended_id=False))
+
+    def exchange(self, request: bytes | str, timeout_s: float | None = None) -> bytes | None:
+        """Send the request, return the answer's data (None: no answer within the timeout)."""
+        self.send(0x600 + self.node_id, request)
+        msg = self._recv(lambda m: m.arbitration_id == 0x580 + self.node_id, timeout_s, keep_others=True)
+        return None if msg is None else bytes(msg.data)
+
+    def wait_for(self, predicate, timeout_s: float | None = None):
+        """The first message (kept ones first) matching `predicate(msg)`, None after the timeout; messages
+        kept before the match are dropped."""
+        for k, msg in enumerate(self.others):
+            if predicate(msg):
+                del self.others[:k + 1]
+                return msg
+        self.others.clear()
+        return self._recv(predicate, timeout_s, keep_others=False)
+
+    def _recv(self, predicate, timeout_s: float | None, keep_others: bool):
+        import time
+
+        deadline = time.monotonic() + (self.timeout_s if timeout_s is None else timeout_s)
+        while True:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return None
+            msg = self.bus.recv(timeout=left)
+            if msg is None:
+                continue
+            if predicate(msg):
+                return msg
+            if keep_others:
+                self.others.append(msg)
+
+
+class ServedDrive:
+    """A drive attached (`drive.attach`) to a fresh python-can `virtual` channel, with a raw client on the
+    same channel; a context manager that waits for the boot-up message and detaches at the end.
+
+        with ServedDrive(E1100Drive(1, timings=DriveTimings.fast())) as served:
+            served.client.exchange("40 A2 33 01 00 00 00 00")
+    """
+
+    def __init__(self, drive, channel: str | None = None, boot_timeout_s: float = 10.0):
+        import uuid
+
+        self.drive = drive
+        self.channel = channel or f"linmot-st-{uuid.uuid4().hex[:12]}"
+        self.boot_timeout_s = boot_timeout_s
+        self.client: RawSdoClient | None = None
+        self._buses: list = []
+
+    def __enter__(self) -> "ServedDrive":
+        import can
+
+        drive_bus = can.Bus(interface="virtual", channel=self.channel)
+        raw = can.Bus(interface="virtual", channel=self.channel)
+        self._buses = [drive_bus, raw]
+        self.client = RawSdoClient(raw, self.drive.node_id)
+        try:
+            self.drive.attach(drive_bus)
+            boot = self.client.wait_for(lambda m: m.arbitration_id == 0x700 + self.drive.node_id,
+                                        self.boot_timeout_s)
+            if boot is None or bytes(boot.data) != b"\x00":
+                raise RuntimeError(f"no boot-up message from node {self.drive.node_id} within {self.boot_timeout_s} s")
+        except BaseException:
+            self.__exit__()
+            raise
+        return self
+
+    def __exit__(self, *exc) -> None:
+        try:
+            self.drive.detach()
+        finally:
+            for bus in self._buses:
+                bus.shutdown()
+            self._buses = []
