@@ -10,7 +10,7 @@ import pytest
 from linmot_st.emulator import DriveTimings, E1100Drive, ProtocolOptions, build_entry
 from linmot_st.emulator.testing import ServedDrive
 
-from test_emulator_vectors import seed_curve_23
+from shared_vectors import seed_curve
 
 FAST = DriveTimings.fast(boot_ns=2_000_000)
 ENTRY = build_entry(0x0101, struct.pack("<iIII", 500_000, 1_000_000, 100_000, 100_000), name="GoTo50mm")
@@ -21,7 +21,7 @@ STATE = bytes.fromhex("22 00 00 08")            # abort 08000022h
 
 def served(**options) -> ServedDrive:
     drive = E1100Drive(1, timings=FAST, protocol=ProtocolOptions(**options))
-    drive.curves.flash[23] = seed_curve_23()
+    drive.curves.flash[23] = seed_curve(23)
     drive.ct.flash[5] = ENTRY
     return ServedDrive(drive)
 
@@ -54,7 +54,7 @@ def test_bad_option_values_are_refused(field, value):
 # ---- 61h / 62h: curve reads ------------------------------------------------------------------------------------
 
 def _curve_reads(layout: str) -> None:
-    curve = seed_curve_23()
+    curve = seed_curve(23)
     with served(curve_read=layout) as s:
         x = s.client.exchange
         assert x("40 17 20 61 00 00 00 00") == frame("80 17 20 61", STATE)          # no 60h yet: any layout

@@ -19,24 +19,16 @@ from pathlib import Path
 import pytest
 
 from linmot_st.bus import Frame
-from linmot_st.emulator import (Curve, DriveTimings, E1100Drive, ErrorEntry, ErrorLog, build_entry,
+from linmot_st.emulator import (DriveTimings, E1100Drive, ErrorEntry, ErrorLog, build_entry,
                                 load_profile)
 from linmot_st.emulator.testing import DirectLink, ServedDrive
+from shared_vectors import seed_curve
 
 VECTORS = json.loads((Path(__file__).parent / "vectors" / "sdo_frames.json").read_text())
 S = 1_000_000_000
 MS = 1_000_000
 TOLERANCE_NS = 1_000_000
 
-SEED_INFO_WORDS = [0x00030046, 0x0004000A, 0x6D617845, 0x5F656C70, 0x76727543, 0x00000065, 0x00000000,
-                   0x00170000, 0x00004E20, 0x0005001A, 0x4E200301, 0x00000000, 0x42400000, 0x0000000F, 0, 0, 0, 0]
-SEED_DATA_WORDS = [0x00000000, 0x000075CA, 0x0001C8F2, 0x0003D090, 0x00064DF8, 0x0008F448, 0x000B71B0,
-                   0x000D794E, 0x000ECC76, 0x000F4240]
-
-
-def seed_curve_23() -> Curve:
-    info = b"".join(w.to_bytes(4, "little") for w in SEED_INFO_WORDS)[:70]
-    return Curve(23, info, b"".join(w.to_bytes(4, "little") for w in SEED_DATA_WORDS))
 
 
 def make_drive(kind: str, timings: DriveTimings | None = None) -> E1100Drive:
@@ -49,7 +41,7 @@ def make_drive(kind: str, timings: DriveTimings | None = None) -> E1100Drive:
         return E1100Drive(1, profile, timings, error_log=ErrorLog(21, entries, occurred=52))
     if kind == "seed_curve_23_in_flash":
         d = E1100Drive(1, timings=timings)
-        d.curves.flash[23] = seed_curve_23()
+        d.curves.flash[23] = seed_curve(23)
         return d
     if kind == "ct_entry_5_in_flash":
         d = E1100Drive(1, timings=timings)
