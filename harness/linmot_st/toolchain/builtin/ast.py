@@ -241,7 +241,7 @@ class PragmaStmt(Node):
 @dataclass(eq=False)
 class Expr(Node):
     ty: Any = field(default=None, init=False, repr=False)       # set by the checker
-    paren: bool = field(default=False, init=False, repr=False)   # written in parentheses
+    paren: int = field(default=0, init=False, repr=False)        # how many parentheses enclose it
 
 
 @dataclass(eq=False)

@@ -358,7 +358,7 @@ class _Builder(lark.Transformer):
 
     def paren(self, items):
         e = items[0]
-        e.paren = True
+        e.paren += 1
         return e
 
     def direct_var(self, items):
