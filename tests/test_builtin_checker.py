@@ -33,7 +33,7 @@ def one_error(src: str) -> str:
 
 
 def prog(body: str, decls: str = "", vars_: str = "i : INT; d : DINT;") -> str:
-    return f"{decls}\nPROGRAM p\n  VAR {vars_} END_VAR\n{body}\nEND_PROGRAM\n"
+    return f"{decls}\nPROGRAM pp\n  VAR {vars_} END_VAR\n{body}\nEND_PROGRAM\n"
 
 
 def test_accepts_a_small_program():
@@ -43,17 +43,17 @@ def test_accepts_a_small_program():
 # ---------------------------------------------------------------- syntax
 
 def test_syntax_error_position():
-    e = one_error("PROGRAM p\n  VAR i : INT; END_VAR\n  i := ;\nEND_PROGRAM\n")
+    e = one_error("PROGRAM pp\n  VAR i : INT; END_VAR\n  i := ;\nEND_PROGRAM\n")
     assert e.startswith("t.st:3:8: error: syntax error")
 
 
 def test_unterminated_comment():
-    e = one_error("PROGRAM p\n  VAR i : INT; END_VAR\n  (* no end\n  i := 1;\nEND_PROGRAM\n")
+    e = one_error("PROGRAM pp\n  VAR i : INT; END_VAR\n  (* no end\n  i := 1;\nEND_PROGRAM\n")
     assert e == "t.st:3:3: error: unterminated comment: '(*' has no matching '*)'"
 
 
 def test_unexpected_end_of_file():
-    assert "unexpected end of file" in one_error("PROGRAM p\n  VAR i : INT; END_VAR\n  i := 1;\n")
+    assert "unexpected end of file" in one_error("PROGRAM pp\n  VAR i : INT; END_VAR\n  i := 1;\n")
 
 
 def test_reserved_word_in_declaration():
@@ -62,7 +62,7 @@ def test_reserved_word_in_declaration():
 
 def test_nested_comments_are_not_supported():
     # MatIEC without -n: the first *) ends the comment, the rest is a syntax error
-    assert "syntax error" in one_error("PROGRAM p\n  VAR i : INT; END_VAR\n  (* a (* b *) c *)\n  i := 1;\nEND_PROGRAM\n")
+    assert "syntax error" in one_error("PROGRAM pp\n  VAR i : INT; END_VAR\n  (* a (* b *) c *)\n  i := 1;\nEND_PROGRAM\n")
 
 
 # ---------------------------------------------------------------- typing
@@ -96,7 +96,7 @@ def test_nested_comments_are_not_supported():
     ("i := i.3;", "bit access (x.3) is outside the supported subset"),
     ("i := 'abc';", "expected INT, found STRING"),
     ("d := T#1s;", "expected DINT, found TIME"),
-    ("i := EN;", "'EN' is not declared in p"),
+    ("i := EN;", "'EN' is not declared in pp"),
 ])
 def test_type_errors(stmt, message):
     e = one_error(prog("  " + stmt))
@@ -122,7 +122,7 @@ def test_a_signed_literal_fits_while_a_negated_one_does_not():
 # ---------------------------------------------------------------- declarations
 
 def test_declaration_before_use():
-    e = one_error("PROGRAM p\n  VAR x : later; END_VAR\n  x.a := 1;\nEND_PROGRAM\n"
+    e = one_error("PROGRAM pp\n  VAR x : later; END_VAR\n  x.a := 1;\nEND_PROGRAM\n"
                   "TYPE later : STRUCT a : INT; END_STRUCT; END_TYPE\n")
     assert "unknown type 'later' (types must be declared before they are used)" in e
 
@@ -173,25 +173,25 @@ def test_subrange_initial_value_out_of_range():
 def test_external_without_global():
     src = prog("  g := 1;", vars_="i : INT;").replace("END_VAR\n", "END_VAR\n  VAR_EXTERNAL g : INT; END_VAR\n", 1) + \
         "CONFIGURATION c\n  RESOURCE r ON PLC\n    TASK t(INTERVAL := T#10ms, PRIORITY := 0);\n" \
-        "    PROGRAM i1 WITH t : p;\n  END_RESOURCE\nEND_CONFIGURATION\n"
-    assert "VAR_EXTERNAL 'g' of p has no VAR_GLOBAL in resource r" in one_error(src)
+        "    PROGRAM i1 WITH t : pp;\n  END_RESOURCE\nEND_CONFIGURATION\n"
+    assert "VAR_EXTERNAL 'g' of pp has no VAR_GLOBAL in resource r" in one_error(src)
 
 
 def test_external_of_a_constant_global_must_be_constant():
     src = prog("  i := g;").replace("END_VAR\n", "END_VAR\n  VAR_EXTERNAL g : INT; END_VAR\n", 1) + \
         "CONFIGURATION c\n  VAR_GLOBAL CONSTANT g : INT := 1; END_VAR\n  RESOURCE r ON PLC\n" \
-        "    TASK t(INTERVAL := T#10ms, PRIORITY := 0);\n    PROGRAM i1 WITH t : p;\n  END_RESOURCE\nEND_CONFIGURATION\n"
+        "    TASK t(INTERVAL := T#10ms, PRIORITY := 0);\n    PROGRAM i1 WITH t : pp;\n  END_RESOURCE\nEND_CONFIGURATION\n"
     assert "declare it VAR_EXTERNAL CONSTANT" in one_error(src)
 
 
 def test_unknown_task():
     src = prog("  i := 1;") + "CONFIGURATION c\n  RESOURCE r ON PLC\n    TASK t(INTERVAL := T#10ms, PRIORITY := 0);\n" \
-        "    PROGRAM i1 WITH nope : p;\n  END_RESOURCE\nEND_CONFIGURATION\n"
+        "    PROGRAM i1 WITH nope : pp;\n  END_RESOURCE\nEND_CONFIGURATION\n"
     assert "unknown task 'nope'" in one_error(src)
 
 
 def test_located_size_must_match():
-    e = one_error("PROGRAM p\n  VAR\n    w AT %IW2 : DINT;\n  END_VAR\n  VAR i : INT; END_VAR\n  i := 1;\nEND_PROGRAM\n")
+    e = one_error("PROGRAM pp\n  VAR\n    w AT %IW2 : DINT;\n  END_VAR\n  VAR i : INT; END_VAR\n  i := 1;\nEND_PROGRAM\n")
     assert "the size of %IW2 does not match the type DINT" in e
 
 
@@ -220,13 +220,13 @@ def test_included_files_keep_their_names_and_lines(tmp_path: Path):
     (tmp_path / "lib" / "types.st").write_text("TYPE t_ok : INT; END_TYPE\n")
     (tmp_path / "lib" / "bad.st").write_text("(* a comment *)\nFUNCTION f : INT\n  f := zz;\nEND_FUNCTION\n")
     entry = tmp_path / "main.st"
-    entry.write_text('{#include "lib/types.st"}\n{#include "lib/bad.st"}\nPROGRAM p\n  VAR i : t_ok; END_VAR\n'
+    entry.write_text('{#include "lib/types.st"}\n{#include "lib/bad.st"}\nPROGRAM pp\n  VAR i : t_ok; END_VAR\n'
                      '  i := q;\nEND_PROGRAM\n')
     with pytest.raises(BuiltinCompileError) as info:
         compile_to_c(entry, tmp_path, tmp_path / "out")
     assert [str(d) for d in info.value.diagnostics] == [
         "lib/bad.st:3:8: error: 'zz' is not declared in f",
-        "main.st:5:8: error: 'q' is not declared in p",
+        "main.st:5:8: error: 'q' is not declared in pp",
     ]
 
 

@@ -263,11 +263,9 @@ def test_force_pins_a_variable_until_unforced(plc):
         plc.force("INST0.GRID[1, 0]", 1)
 
 
-def test_force_a_global_written_through_var_external(plc, request):
-    if plc.backend == "builtin":
-        request.applymarker(pytest.mark.xfail(strict=True, reason=(
-            "builtin backend: a write through VAR_EXTERNAL checks only the external's own flag, not the "
-            "global's force flag as MatIEC's __SET_EXTERNAL does")))
+def test_force_a_global_written_through_var_external(plc):
+    """A forced global holds against writes through VAR_EXTERNAL (MatIEC's __SET_EXTERNAL checks the
+    global's force flag too), on both backends."""
     plc.force("CONFIG0.TOTAL", 7)
     plc.step(2)
     assert plc["CONFIG0.TOTAL"] == 7
@@ -374,3 +372,59 @@ def test_backends_agree_on_layout_and_values(tmp_path):
         plc["INST0.RECS[2].LABEL"] = "x"
         seen[backend] = (sorted(manifest["types"]), sorted(plc.roots()), {r: plc[r] for r in plc.roots()})
     assert seen["matiec"] == seen["builtin"]
+
+
+FORCE_EXTERNALS = """
+FUNCTION_BLOCK Writer
+  VAR_EXTERNAL
+    G : INT;
+    L : INT;
+  END_VAR
+  G := G + 1;
+  L := L + 1;
+END_FUNCTION_BLOCK
+
+PROGRAM Main
+  VAR_EXTERNAL
+    G : INT;
+  END_VAR
+  VAR
+    W : Writer;
+  END_VAR
+  W();
+  G := G + 10;
+END_PROGRAM
+
+CONFIGURATION Config0
+  VAR_GLOBAL
+    G : INT;
+  END_VAR
+  RESOURCE Res0 ON PLC
+    VAR_GLOBAL
+      L AT %MW4 : INT;
+    END_VAR
+    TASK T1(INTERVAL := T#10ms, PRIORITY := 0);
+    PROGRAM Inst0 WITH T1 : Main;
+  END_RESOURCE
+END_CONFIGURATION
+"""
+
+
+@pytest.mark.parametrize("backend", BACKEND_PARAMS)
+def test_forced_globals_hold_against_every_external_write(backend, tmp_path):
+    """The global's force flag guards writes through any VAR_EXTERNAL bound to it: in a program, in an FB
+    instance, and for a located global; the external's own flag guards them too."""
+    plc = Plc(build_text(FORCE_EXTERNALS, tmp_path, backend))
+    plc.step(1)
+    assert (plc["CONFIG0.G"], plc["CONFIG0.RES0.L"], plc["%MW4"]) == (11, 1, 1)
+    plc.force("CONFIG0.G", 100)
+    plc.force("CONFIG0.RES0.L", 50)
+    plc.step(3)
+    assert (plc["CONFIG0.G"], plc["CONFIG0.RES0.L"], plc["%MW4"]) == (100, 50, 50)
+    plc.unforce("CONFIG0.G")
+    plc.unforce("CONFIG0.RES0.L")
+    plc.step(1)
+    assert (plc["CONFIG0.G"], plc["%MW4"]) == (111, 51)
+    plc.force("INST0.W.G", 5)          # the FB's own external: its writes stop; the program's go on
+    plc.step(1)
+    assert plc["CONFIG0.G"] == 15

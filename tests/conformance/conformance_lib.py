@@ -9,7 +9,8 @@ Each case is one file under cases/, an ST text whose first comment says what mus
       matiec-expect 1: N = 0; I = 5          ... and gives these values instead (left out of the
                                              differential comparison)
       interval: T#10ms                       the task interval (default T#10ms)
-      reject 7: type mismatch                the builtin compiler rejects it, line 7, message containing...
+      reject 7:12: type mismatch             the builtin compiler rejects it, first diagnostic at line 7,
+                                             column 12 (`reject 7:` checks the line only), message containing...
       matiec-accepts: relaxed arrays (-l)    ...while MatIEC (with the build driver's flags) accepts it
       fault 2: kind 1 line 9                 scan 2 raises a PLC fault of this kind at this line
     *)
@@ -48,6 +49,7 @@ class Case:
     interval: str = DEFAULT_INTERVAL
     reject: str | None = None
     reject_line: int | None = None
+    reject_col: int | None = None
     matiec_accepts: str = ""
     fault: tuple[int, int, int | None] | None = None    # (scan, kind, line)
     own_config: bool = False
@@ -153,8 +155,10 @@ def load_case(path: Path) -> Case:
         elif key == "interval":
             case.interval = rest
         elif key == "reject":
-            case.reject = rest
+            col = re.match(r"(\d+):\s*(.*)$", rest) if num else None
+            case.reject = col.group(2) if col else rest
             case.reject_line = int(num) if num else None
+            case.reject_col = int(col.group(1)) if col else None
         elif key == "matiec-accepts":
             case.matiec_accepts = rest
         elif key == "fault":

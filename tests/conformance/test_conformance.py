@@ -7,6 +7,7 @@ matiec-expect) and checked as such, never skipped.
 
 from __future__ import annotations
 
+import re
 import tempfile
 from pathlib import Path
 
@@ -28,6 +29,7 @@ BACKENDS = [
     pytest.param("matiec", marks=[pytest.mark.matiec, pytest.mark.skipif(not HAVE_MATIEC, reason=MATIEC_MISSING)]),
 ]
 WORK = Path(tempfile.gettempdir()) / "linmot-st-conformance"
+DIAGNOSTIC = re.compile(r"^(?P<file>[^:]+):(?P<line>\d+):(?P<col>\d+): error: (?P<msg>.+)$")
 
 
 def _write(folder: Path, name: str, text: str) -> Path:
@@ -140,10 +142,16 @@ def test_reject(case: Case, backend: str):
     text = str(info.value)
     if backend == "builtin":
         first = info.value.diagnostics[0]
-        assert case.reject.lower() in text.lower(), f"{case.name}: expected {case.reject!r} in:\n{text}"
+        m = DIAGNOSTIC.match(first)
+        assert m, f"{case.name}: not `file:line:col: error: message`: {first!r}"
+        assert Path(m["file"]).name == path.name, f"{case.name}: the diagnostic names {m['file']}, not {path.name}"
+        assert case.reject.lower() in m["msg"].lower(), f"{case.name}: expected {case.reject!r} in:\n{text}"
         if case.reject_line is not None:
-            assert f":{case.reject_line}:" in first, f"{case.name}: expected line {case.reject_line}:\n{text}"
-        assert first.startswith(f"{path.name}:") or ":" in first
+            assert int(m["line"]) == case.reject_line, f"{case.name}: expected line {case.reject_line}:\n{text}"
+        if case.reject_col is not None:
+            assert int(m["col"]) == case.reject_col, f"{case.name}: expected column {case.reject_col}:\n{text}"
+    else:   # MatIEC's own words, in the same form
+        assert DIAGNOSTIC.match(info.value.diagnostics[0]), info.value.diagnostics[0]
 
 
 @pytest.mark.parametrize("backend", BACKENDS)

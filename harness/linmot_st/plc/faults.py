@@ -7,7 +7,7 @@ import subprocess
 from pathlib import Path
 
 FAULT_KINDS = {
-    1: "integer division by zero",
+    1: "integer division by zero or overflow (MIN / -1)",
     2: "array index out of range",
     3: "arithmetic fault",
     4: "fatal signal",

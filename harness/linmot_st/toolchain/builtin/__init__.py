@@ -53,7 +53,7 @@ class BuiltinOutput:
 def backend_version() -> str:
     h = hashlib.sha256()
     for p in sorted(PACKAGE_DIR.iterdir()):
-        if p.suffix in (".py", ".lark", ".h"):
+        if p.suffix in (".py", ".lark", ".h", ".json"):
             h.update(p.name.encode())
             h.update(p.read_bytes())
     return "builtin-" + h.hexdigest()[:12]

@@ -82,12 +82,12 @@ static inline long long __ixu(unsigned long long i, long long lo, long long hi, 
 
 /* ---------------------------------------------------------------- integer division, MOD
  * x / 0 is a PLC fault. MIN / -1 wraps for SINT and INT (as C's int promotion does in MatIEC's code)
- * and is an arithmetic fault for DINT and LINT (where MatIEC's code traps). x MOD 0 = 0 and
- * DIV(x, 0) = 0, as MatIEC defines them. */
+ * and is the same fault as x / 0 for DINT and LINT (kind 1: MatIEC's code traps there, and x86 reports
+ * both as SIGFPE/FPE_INTDIV). x MOD 0 = 0 and DIV(x, 0) = 0, as MatIEC defines them. */
 #define __INT_DIV(T, UT, MIN, TRAP) \
 static inline T __div_##T(T a, T b, const char *p, const char *f, int l) { \
     if (__builtin_expect(b == 0, 0)) __fault(__FAULT_DIV0, p, f, l); \
-    if (b == (T)-1) { if (TRAP && a == MIN) __fault(__FAULT_ARITH, p, f, l); return (T)(0 - (UT)a); } \
+    if (b == (T)-1) { if (TRAP && a == MIN) __fault(__FAULT_DIV0, p, f, l); return (T)(0 - (UT)a); } \
     return (T)(a / b); } \
 static inline T __divf_##T(T a, T b) { \
     if (b == 0) return 0; \
@@ -402,6 +402,11 @@ static inline __ns_t __dt_to_date(__ns_t t) {
 }
 
 /* ---------------------------------------------------------------- the variable wrappers */
-#define __DECLARE_V(T) typedef struct { T value; BYTE flags; } __V_##T; typedef struct { T *value; BYTE flags; } __P_##T;
+/* __V_T is MatIEC's __IEC_T_t, __P_T its __IEC_T_p. A VAR_EXTERNAL's __P_T also keeps, in the padding
+   after `flags` (so size and layout stay MatIEC's), the index in __gflags of the force flags of the global
+   it is bound to: a write through it is skipped when either is forced, as MatIEC's __SET_EXTERNAL does. */
+#define __DECLARE_V(T) typedef struct { T value; BYTE flags; } __V_##T; \
+    typedef struct { T *value; BYTE flags; unsigned short gflag; } __P_##T; \
+    _Static_assert(sizeof(__P_##T) == sizeof(struct { T *v; BYTE f; }), "__P_" #T " keeps MatIEC's size");
 
 #endif

@@ -11,10 +11,13 @@ The checker annotates the AST in place (`Expr.ty`, `Name.sym`, `Call.target`) fo
 
 from __future__ import annotations
 
+import functools
+import json
 import re
+from pathlib import Path
 
 from . import ast as A
-from . import stdfb
+from . import nesting, stdfb
 from . import stdfuncs as SF
 from . import types as T
 from .errors import BuiltinCompileError, Diagnostic
@@ -40,6 +43,43 @@ UNSUPPORTED_FUNCTIONS = {
     "MEMCPY": "MEMCPY", "ASC": "ASC", "CHR": "CHR", "LEN_WSTRING": "WSTRING functions", "NEW": "__NEW",
 }
 
+
+@functools.lru_cache(maxsize=1)
+def matiec_library_names() -> frozenset[str]:
+    """Identifiers of MatIEC's standard library that cannot name a POU, a type or the configuration
+    (matiec_lib_names.json says why)."""
+    data = json.loads((Path(__file__).with_name("matiec_lib_names.json")).read_text())
+    return frozenset(data["names"])
+
+
+FLT_MAX, FLT_MIN = 3.4028234663852886e38, 1.1754943508222875e-38
+
+
+def outside_float_range(text: str) -> bool:
+    """Whether MatIEC rejects this real literal: it reads every real literal with C's strtof (a defect:
+    its test of which strtoX to use is always true), whatever the type, and refuses one that sets ERANGE,
+    i.e. beyond +-3.4E38 or, non-zero, below 1.18E-38 in magnitude: so even `LREAL#1.0E300`."""
+    fn = _strtof()
+    if fn is not None:
+        import ctypes
+        ctypes.set_errno(0)
+        fn(text.replace("_", "").encode("ascii", "replace"), None)
+        return ctypes.get_errno() != 0
+    v = abs(float(text.replace("_", "")))     # without a C library: the same bounds, to a rounding
+    return v > FLT_MAX or 0 < v < FLT_MIN
+
+
+@functools.lru_cache(maxsize=1)
+def _strtof():
+    try:
+        import ctypes
+        fn = ctypes.CDLL(None, use_errno=True).strtof
+    except (OSError, AttributeError):
+        return None
+    fn.restype, fn.argtypes = ctypes.c_float, [ctypes.c_char_p, ctypes.c_void_p]
+    return fn
+
+
 LOCATION_RE = re.compile(r"%([IQM])([XBWDL]?)(\d+(?:\.\d+)*)$")
 SIZE_BITS = {"X": 1, "B": 8, "W": 16, "D": 32, "L": 64}
 
@@ -59,9 +99,12 @@ class Checker:
         self.located: dict[str, LocatedCell] = {}
         self.cur: PouSym | None = None
         self.loops = 0
+        self.for_vars: list[Var] = []       # control variables of the FOR loops around the statement
         self.anon = 0
         self._std_ast: dict[str, A.Pou] | None = None
         self._std_mode = False
+        self.config_names: set[str] = set()
+        self.failed_pous: set[str] = set()   # POUs whose declaration was rejected: uses are not reported
 
     # ------------------------------------------------------------------ diagnostics
     def error(self, pos: A.Pos, msg: str):
@@ -75,6 +118,8 @@ class Checker:
 
     # ------------------------------------------------------------------ entry
     def check(self, elements: list[A.Node], files: list[str]) -> Program:
+        # iec2c -p reads the configuration's name before the POUs: no other identifier may take it
+        self.config_names = {el.name.upper() for el in elements if isinstance(el, A.Configuration)}
         for el in elements:
             try:
                 if isinstance(el, A.TypeBlock):
@@ -82,7 +127,7 @@ class Checker:
                         try:
                             self.declare_type(decl)
                         except _Abort:
-                            pass
+                            self.types.setdefault(decl.name.upper(), T.ERROR)
                 elif isinstance(el, A.Pou):
                     self.declare_pou(el)
                 elif isinstance(el, A.Configuration):
@@ -107,10 +152,17 @@ class Checker:
             self.error(pos, f"'{name}' is a reserved word and cannot name a {what}")
         if SF.is_std_function(k) or k in SF.MISSING_IN_MATIEC_C:
             self.error(pos, f"'{name}' is the name of a standard function and cannot name a {what}")
+        if k in self.config_names and what != "configuration" and not self._std_mode:
+            self.error(pos, f"'{name}' is the name of the CONFIGURATION and cannot name a {what} (MatIEC rejects "
+                            "it: with -p, iec2c knows the configuration's name before it reads the POUs)")
         return k
 
     def check_global_name(self, name: str, pos: A.Pos, what: str) -> str:
         k = self.check_identifier(name, pos, what)
+        if k in matiec_library_names() and not self._std_mode:
+            self.error(pos, f"'{name}' cannot name a {what}: it is a variable name in MatIEC's standard library, "
+                            "and iec2c -p (which the build uses, as Beremiz does) then fails to parse that library "
+                            "('standard_functions.txt: invalid input variable(s) declaration'); choose a longer name")
         if k in self.types:
             self.error(pos, f"'{name}' is already declared as a type")
         if k in self.pous:
@@ -167,6 +219,8 @@ class Checker:
             return T.ELEMENTARY_ALIASES[k]
         if k in self.types:
             return self.types[k]
+        if k in self.failed_pous:
+            raise _Abort     # its declaration was rejected, and reported
         if k in self.pous:
             pou = self.pous[k]
             if pou.kind == "FUNCTION_BLOCK":
@@ -289,6 +343,9 @@ class Checker:
                 if count < 1:
                     self.error(init.pos, "a repetition count must be at least 1")
                 total += count
+                if isinstance(value, A.StructInit) and isinstance(ty.elem.base(), T.Struct):
+                    self.error(value.pos, "STRUCT initialisers as elements of an array initialiser are outside the "
+                                          "supported subset (MatIEC rejects them); assign the elements in the body")
                 if value is not None:
                     self.const_value(value, ty.elem)
             if total > ty.count:
@@ -298,9 +355,12 @@ class Checker:
             if not isinstance(ty, (T.Struct, T.PouType)):
                 self.error(init.pos, f"a structure initialiser for a variable of type {T.describe(ty)}")
             if isinstance(ty, T.Struct):
-                self.error(init.pos, "initialising the fields of a STRUCT value is outside the supported subset "
-                                     "(MatIEC rejects most of them): give the STRUCT type default values, or "
-                                     "assign the fields in the body")
+                dated = _date_field(ty)
+                if dated is not None:
+                    self.error(init.pos, f"{ty.name} holds a {dated[1].name} ('{dated[0]}'): a STRUCT initialiser of "
+                                         "a type with a DATE or DT inside is outside the supported subset (MatIEC's "
+                                         "C initialises those with a function call where C needs a constant); give "
+                                         "the fields defaults in the STRUCT type, or assign them in the body")
             seen = set()
             for fname, pos, value in init.items:
                 k = fname.upper()
@@ -308,10 +368,7 @@ class Checker:
                     self.error(pos, f"field '{fname}' initialised twice")
                 seen.add(k)
                 if isinstance(ty, T.Struct):
-                    f = ty.field(k)
-                    if f is None:
-                        self.error(pos, f"'{T.describe(ty)}' has no field '{fname}'")
-                    self.const_value(value, f.ty)
+                    self.struct_field_init(ty, fname, pos, value)
                 else:
                     v = ty.pou.vars.get(k)
                     if v is None or v.kind not in ("VAR_INPUT", "VAR_OUTPUT", "VAR") or v.implicit:
@@ -334,6 +391,36 @@ class Checker:
             self.coerce(init, ty, "initial value")
         finally:
             self.cur = saved
+
+    def struct_field_init(self, st: T.Struct, fname: str, pos: A.Pos, value: A.Node) -> None:
+        """One `field := value` of a STRUCT initialiser, within what MatIEC checks and compiles right.
+
+        MatIEC (HEAD 2024-10) finds the field an initialiser names as the first field, in declaration
+        order, whose upper-case name sorts at or after the given one (its list lookup uses the `<` of its
+        name map as if it were `==`), and checks the value against that field's type; its C then
+        initialises the right field. So an initialiser is accepted here only where that lookup finds the
+        field itself, which is always the case when the fields are declared in alphabetical order."""
+        k = fname.upper()
+        f = st.field(k)
+        if f is None:
+            self.error(pos, f"'{T.describe(st)}' has no field '{fname}'")
+        found = next((g for g in st.fields if g.key >= k), None)
+        if found is not f:
+            self.error(pos, f"field '{fname}' of {st.name} cannot be initialised here: MatIEC looks it up as the "
+                            f"first field, in declaration order, whose name sorts at or after '{f.key}', which is "
+                            f"'{found.name}', and checks the value against that field's type; declare the fields "
+                            f"in alphabetical order, or give '{fname}' a default in the STRUCT type, or assign it in "
+                            "the body")
+        fb = f.ty.base()
+        if isinstance(fb, T.Array):
+            self.error(pos, f"field '{fname}' is an ARRAY ({T.describe(f.ty)}): array values in a STRUCT initialiser "
+                            "are outside the supported subset (MatIEC rejects them); give the field a default in "
+                            "the STRUCT type or assign it in the body")
+        if isinstance(fb, T.Enum):
+            self.error(pos, f"field '{fname}' is an enumeration ({T.describe(f.ty)}): enumerated values in a STRUCT "
+                            "initialiser are outside the supported subset (iec2c crashes on them); give the field "
+                            "a default in the STRUCT type or assign it in the body")
+        self.const_value(value, f.ty)
 
     def enum_value_of(self, e: A.Node, en: T.Enum) -> int:
         if isinstance(e, A.EnumLit):
@@ -408,6 +495,7 @@ class Checker:
             pou.params = [v for v in pou.vars.values()
                           if v.kind in ("VAR_INPUT", "VAR_IN_OUT", "VAR_OUTPUT") and not v.implicit]
         except _Abort:
+            self.failed_pous.add(k)
             return
         finally:
             self.cur = saved
@@ -442,9 +530,32 @@ class Checker:
             self.error(decl.pos, f"{decl.edge} declarations are outside the supported subset; use R_TRIG/F_TRIG")
         if not decl.names:
             self.error(decl.pos, "a located variable needs a name")
-        # one type for the whole declaration: `a, b : ARRAY[..] OF INT` gives a and b the same type
-        ty = self.resolve_spec(decl.spec)
         table = pou.vars if table is None else table
+        # one type for the whole declaration: `a, b : ARRAY[..] OF INT` gives a and b the same type
+        try:
+            ty = self.resolve_spec(decl.spec)
+        except _Abort:
+            # declared all the same, with the error type, so that their uses add no "not declared"
+            self.declare_names(pou, kind, qual, decl, T.ERROR, None, scope, table)
+            raise
+        if ty is T.ERROR:
+            self.declare_names(pou, kind, qual, decl, T.ERROR, None, scope, table)
+            return []
+        try:
+            return self.declare_checked(pou, kind, qual, decl, ty, scope, table)
+        except _Abort:
+            self.declare_names(pou, kind, qual, decl, ty, None, scope, table)
+            raise
+
+    def declare_names(self, pou, kind, qual, decl, ty, init, scope, table) -> None:
+        """Declare a rejected declaration's names that are still free (no further diagnostic)."""
+        for name, pos in decl.names:
+            k = name.upper()
+            if k not in table and not (pou is not None and pou.result is not None and k == pou.key):
+                table[k] = Var(name, k, ty, kind, pos, constant=(qual == "CONSTANT"), init=init,
+                               location=None, pou=pou, scope=scope)
+
+    def declare_checked(self, pou, kind, qual, decl, ty, scope, table) -> list[Var]:
         owner = pou.kind if pou else "resource"
         if isinstance(ty, T.PouType):
             if ty.pou.kind == "PROGRAM":
@@ -535,6 +646,11 @@ class Checker:
             self.declare_globals(block, cfg, cfg.globals)
         if not node.resources:
             self.error(node.pos, "a CONFIGURATION needs at least one RESOURCE")
+        resource_names = {r.name.upper(): r for r in node.resources}
+        for g in cfg.globals.values():
+            if g.key in resource_names:
+                self.report(g.pos, f"global '{g.name}' has the name of resource {resource_names[g.key].name} "
+                                   "(MatIEC rejects it)")
         for rnode in node.resources:
             rk = self.check_identifier(rnode.name, rnode.pos, "resource")
             if any(r.key == rk for r in cfg.resources):
@@ -542,6 +658,10 @@ class Checker:
             res = ResourceSym(rnode.name, rk, rnode.pos, config=cfg)
             for block in rnode.globals:
                 self.declare_globals(block, res, res.globals)
+            for g in res.globals.values():
+                if g.key in resource_names:
+                    self.report(g.pos, f"global '{g.name}' has the name of resource "
+                                       f"{resource_names[g.key].name} (MatIEC rejects it)")
             for tnode in rnode.tasks:
                 try:
                     res.tasks.append(self.declare_task(tnode, res))
@@ -603,6 +723,11 @@ class Checker:
         k = self.check_identifier(node.name, node.pos, "program instance")
         if any(p.key == k for p in res.programs) or k in res.globals:
             self.error(node.pos, f"duplicate name '{node.name}' in resource {res.name}")
+        if k in res.config.globals:
+            self.error(node.pos, f"program instance '{node.name}' has the name of a global of the configuration "
+                                 "(MatIEC rejects it)")
+        if any(r.key == k for r in res.config.resources) or k == res.key:
+            self.error(node.pos, f"program instance '{node.name}' has the name of a resource (MatIEC rejects it)")
         pou = self.pous.get(node.type_name.upper())
         if pou is None or pou.kind != "PROGRAM":
             self.error(node.type_pos, f"'{node.type_name}' is not a PROGRAM declared before the configuration")
@@ -630,6 +755,8 @@ class Checker:
             if g is None:
                 self.report(pos, f"VAR_EXTERNAL '{ext.name}' of {pou.name} has no VAR_GLOBAL in resource {res.name}")
                 continue
+            if T.ERROR in (g.ty, ext.ty):
+                continue
             if not T.same(g.ty, ext.ty):
                 self.report(ext.pos, f"VAR_EXTERNAL '{ext.name}' is {T.describe(ext.ty)} but the global is "
                                      f"{T.describe(g.ty)}{where}")
@@ -643,14 +770,24 @@ class Checker:
 
     # ------------------------------------------------------------------ bodies
     def check_body(self, pou: PouSym) -> None:
-        saved = (self.cur, self.loops)
-        self.cur, self.loops = pou, 0
+        if not pou.std:
+            try:
+                nesting.check_body(pou.kind, pou.ast.body)
+            except nesting.TooDeep as exc:
+                hint = ("compute parts of it into variables first" if exc.what == "expression" else
+                        "move the inner part into a FUNCTION or FUNCTION_BLOCK, or flatten the conditions")
+                self.report(exc.pos, f"{exc.what} nested too deeply: MatIEC's parser keeps at most "
+                                     f"{nesting.LIMIT} symbols pending and this needs {exc.need} here; {hint}")
+                pou.checked = True
+                return
+        saved = (self.cur, self.loops, self.for_vars)
+        self.cur, self.loops, self.for_vars = pou, 0, []
         try:
             if not pou.ast.body:
                 self.report(pou.ast.pos, f"{pou.kind} {pou.name} has no statements (MatIEC rejects an empty body)")
             self.statements(pou.ast.body)
         finally:
-            self.cur, self.loops = saved
+            self.cur, self.loops, self.for_vars = saved
         pou.checked = True
 
     def statements(self, stmts: list[A.Node]) -> None:
@@ -659,6 +796,8 @@ class Checker:
                 self.statement(s)
             except _Abort:
                 pass
+            except RecursionError:      # a backstop: nesting.py bounds the depth of what gets here
+                self.report(s.pos, "expression nested too deeply")
 
     def statement(self, s: A.Node) -> None:
         if isinstance(s, A.Assign):
@@ -744,15 +883,21 @@ class Checker:
         self.coerce(s.end, ty, "FOR end value")
         if s.step is not None:
             self.coerce(s.step, ty, "FOR BY value")
-            if isinstance(s.step, A.Literal) and s.step.value == 0:
-                self.error(s.step.pos, "FOR ... BY 0 never ends")
+            if isinstance(s.step, A.Literal) and s.step.value == 0 and not _leaves_loop(s.body):
+                self.error(s.step.pos, "FOR ... BY 0 never ends: its body has no EXIT or RETURN")
         self.loops += 1
-        self.statements(s.body)
-        self.loops -= 1
+        self.for_vars.append(sym)
+        try:
+            self.statements(s.body)
+        finally:
+            self.for_vars.pop()
+            self.loops -= 1
 
     # ------------------------------------------------------------------ calls as statements
     def call_statement(self, call: A.Call) -> None:
         k = call.name.upper()
+        if k in self.failed_pous and self.lookup_var(k) is None:
+            raise _Abort     # its declaration was rejected, and reported
         v = self.lookup_var(k)
         if v is not None:
             if not v.is_fb_instance:
@@ -763,6 +908,11 @@ class Checker:
             self.error(call.pos, f"'{call.name}' is a {self.pous[k].kind}: declare an instance and call that")
         if k in stdfb.names():
             self.error(call.pos, f"'{call.name}' is a function block: declare an instance and call that")
+        if not self._std_mode and ((k in self.pous and self.pous[k].kind == "FUNCTION") or SF.lookup(k) is not None):
+            self.error(call.pos, f"a call of the function {call.name} used as a statement: MatIEC allows function "
+                                 "calls only inside expressions (\"Function invocation in ST code is not allowed "
+                                 "outside an expression\"); assign its result, e.g. x := "
+                                 f"{call.name}(...)")
         self.infer(call)
 
     def fb_call(self, call: A.Call, inst: Var) -> None:
@@ -861,6 +1011,9 @@ class Checker:
         v = root.sym
         if v.constant:
             self.error(e.pos, f"{what}: '{v.name}' is CONSTANT")
+        if v in self.for_vars:
+            self.error(e.pos, f"{what}: '{v.name}' is the control variable of an enclosing FOR loop, which its "
+                              "body may not change (MatIEC: \"Assignment to FOR control variable is not allowed\")")
         node = e
         while isinstance(node, (A.Member, A.Index)):
             if isinstance(node, A.Member) and isinstance(node.base.ty, T.PouType) and node.sym.kind == "VAR_OUTPUT" \
@@ -883,6 +1036,8 @@ class Checker:
         return ty
 
     def coerce(self, e: A.Node, want: T.Type, what: str) -> None:
+        if want is T.ERROR:
+            raise _Abort     # the target's declaration was rejected, and reported
         ty = self.infer(e)
         if isinstance(ty, T.Pseudo):
             if want.base() not in ty.accepts:
@@ -899,6 +1054,29 @@ class Checker:
 
     def settle(self, e: A.Node, t: T.Type) -> None:
         """Give a pseudo-typed expression (untyped literals, result-overloaded calls) the type t."""
+        rights: list[tuple[A.Node, T.Type]] = []
+        # down a left-associative operator chain iteratively; the right operands are settled after the
+        # innermost left one, the order of a recursive walk
+        while isinstance(e, A.BinOp) and isinstance(e.ty, T.Pseudo):
+            tb = t.base()
+            if tb not in e.ty.accepts:
+                self.error(e.pos, f"type mismatch: {e.ty.name} used as {T.describe(t)}")
+            op = e.op
+            if op in ("+", "-", "*", "/") and not T.is_num(tb):
+                self.error(e.pos, f"'{op}' needs numbers, not {T.describe(t)}")
+            if op == "MOD" and not T.is_int(tb):
+                self.error(e.pos, f"MOD needs integers, not {T.describe(t)}")
+            if op in ("AND", "OR", "XOR") and not T.is_bit(tb):
+                self.error(e.pos, f"{op} needs bit strings (BOOL, BYTE, WORD...), not {T.describe(t)}")
+            e.ty = tb
+            if op != "**":
+                rights.append((e.right, tb))
+            e, t = e.left, tb
+        self.settle_one(e, t)
+        for right, tb in reversed(rights):
+            self.settle(right, tb)
+
+    def settle_one(self, e: A.Node, t: T.Type) -> None:
         p = e.ty
         if not isinstance(p, T.Pseudo):
             return
@@ -915,20 +1093,6 @@ class Checker:
             elif e.kind == "real" and tb is T.REAL and abs(v) > 3.4028235e38:
                 self.error(e.pos, f"the value {e.text} does not fit REAL")
             e.ty = tb
-        elif isinstance(e, A.BinOp):
-            op = e.op
-            if op in ("+", "-", "*", "/") and not T.is_num(tb):
-                self.error(e.pos, f"'{op}' needs numbers, not {T.describe(t)}")
-            if op == "MOD" and not T.is_int(tb):
-                self.error(e.pos, f"MOD needs integers, not {T.describe(t)}")
-            if op in ("AND", "OR", "XOR") and not T.is_bit(tb):
-                self.error(e.pos, f"{op} needs bit strings (BOOL, BYTE, WORD...), not {T.describe(t)}")
-            e.ty = tb
-            if op == "**":
-                self.settle(e.left, tb)
-            else:
-                self.settle(e.left, tb)
-                self.settle(e.right, tb)
         elif isinstance(e, A.UnOp):
             if e.op == "NEG" and not (T.is_num(tb) and T.is_signed(tb)):
                 self.error(e.pos, f"negation needs a signed number, not {T.describe(t)}")
@@ -944,6 +1108,8 @@ class Checker:
     def infer(self, e: A.Node) -> T.Type:
         method = getattr(self, "infer_" + type(e).__name__)
         ty = method(e)
+        if ty is T.ERROR:
+            raise _Abort     # a name whose declaration was rejected (and reported): nothing more to say
         e.ty = ty
         return ty
 
@@ -956,6 +1122,10 @@ class Checker:
                               "s and ms)")
         if e.kind == "string":
             self.check_string_escapes(e)
+        if e.kind == "real" and outside_float_range(e.text):
+            self.error(e.pos, f"the real literal {e.text} is outside the range MatIEC accepts for any real "
+                              "literal, LREAL included (it reads them as 32-bit floats: 1.18E-38 to 3.40E38 in "
+                              "magnitude, or 0)")
         if tn is None:
             if e.kind == "string":
                 return self._string_lit(e)
@@ -1111,9 +1281,19 @@ class Checker:
         return tb
 
     def infer_BinOp(self, e: A.BinOp) -> T.Type:
+        # a left-associative chain (a sum of 5000 terms) is walked iteratively: its left operands
+        # nest without bound, unlike anything else (checked against MatIEC's parser stack)
+        spine = [e]
+        while isinstance(spine[-1].left, A.BinOp):
+            spine.append(spine[-1].left)
+        self.infer(spine[-1].left)
+        for b in reversed(spine):
+            b.ty = self.binop_type(b, b.left.ty, self.infer(b.right))
+        return e.ty
+
+    def binop_type(self, e: A.BinOp, lt: T.Type, rt: T.Type) -> T.Type:
+        """The type of `e`, its operands being typed (lt, rt)."""
         op = e.op
-        lt = self.infer(e.left)
-        rt = self.infer(e.right)
         if op == "**":
             if isinstance(lt, T.Pseudo):
                 if lt is not T.LIT_REAL:
@@ -1220,6 +1400,8 @@ class Checker:
     # ------------------------------------------------------------------ function calls
     def infer_Call(self, e: A.Call) -> T.Type:
         k = e.name.upper()
+        if k in self.failed_pous:
+            raise _Abort     # its declaration was rejected, and reported
         if self.cur is not None and k == self.cur.key:
             self.error(e.pos, f"recursive call of {self.cur.name} (recursion is outside the supported subset)")
         v = self.lookup_var(k)
@@ -1234,6 +1416,14 @@ class Checker:
             if not e.args:
                 self.error(e.pos, f"a call of FUNCTION {pou.name} needs at least one argument (MatIEC)")
             bound = self.bind_args(e, pou.params, pou, allow_en=True)
+            if isinstance(pou.return_type.base(), T.Struct):
+                outs = [p for p, _ in bound if p.kind in ("VAR_OUTPUT", "VAR_IN_OUT")]
+                if outs:
+                    self.error(e.pos, f"{pou.name} returns a STRUCT: a call of it cannot pass "
+                                      f"{'VAR_IN_OUT' if outs[0].kind == 'VAR_IN_OUT' else 'outputs'} ('{outs[0].name}'), "
+                                      "because MatIEC's C for such a call does not compile (it loses the STRUCT's "
+                                      "type name); return the values through a VAR_IN_OUT of a FUNCTION that "
+                                      "returns an elementary value, or use a FUNCTION_BLOCK")
             e.target = (pou, None, bound)
             self.note_callee(pou)
             return pou.return_type
@@ -1480,6 +1670,37 @@ class Checker:
         if n in ("LEN", "FIND"):
             return T.poly(T.INTS, T.INT)
         return T.STRING
+
+
+def _leaves_loop(body: list[A.Node]) -> bool:
+    """Whether a loop body has a way out: a RETURN anywhere, or an EXIT that is not inside an inner loop."""
+    todo = [(s, False) for s in body]
+    while todo:
+        s, nested = todo.pop()
+        if isinstance(s, A.Return) or (isinstance(s, A.Exit) and not nested):
+            return True
+        if isinstance(s, A.If):
+            todo += [(x, nested) for _, b in s.branches for x in b] + [(x, nested) for x in s.else_body or []]
+        elif isinstance(s, A.Case):
+            todo += [(x, nested) for _, b in s.elements for x in b] + [(x, nested) for x in s.else_body or []]
+        elif isinstance(s, (A.For, A.While, A.Repeat)):
+            todo += [(x, True) for x in s.body]
+    return False
+
+
+def _date_field(t: T.Type, path: str = "") -> tuple[str, T.Type] | None:
+    """The first DATE or DT inside a type (through fields and array elements), with its path."""
+    tb = t.base()
+    if tb is T.DATE or tb is T.DT:
+        return path, tb
+    if isinstance(tb, T.Struct):
+        for f in tb.fields:
+            found = _date_field(f.ty, f"{path}.{f.name}" if path else f.name)
+            if found:
+                return found
+    if isinstance(tb, T.Array):
+        return _date_field(tb.elem, path + "[]")
+    return None
 
 
 def _has_index(e: A.Node) -> bool:

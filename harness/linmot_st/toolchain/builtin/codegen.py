@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from . import ast as A
 from . import stdfuncs as SF
 from . import types as T
+from .errors import BuiltinCompileError, Diagnostic
 from .symbols import PouSym, Program, Var
 
 FORCE = "__FORCED"
@@ -102,6 +103,7 @@ class CodeGen:
         self.body: list[str] = []
         self.indent = 1
         self.needed_types: set = set()
+        self.gflag_index: dict[str, int] = {}
 
     # ------------------------------------------------------------------ helpers
     def wrap(self, t: T.Type) -> str:
@@ -238,7 +240,11 @@ class CodeGen:
         globals_decl = self.global_decls()
         code: list[str] = []
         for p in pous:
-            code.extend(self.pou_code(p))
+            try:
+                code.extend(self.pou_code(p))
+            except RecursionError:      # a backstop: the checker bounds the nesting (nesting.py)
+                raise BuiltinCompileError([Diagnostic(p.pos.file, p.pos.line, p.pos.col,
+                                                      f"expression nested too deeply in {p.name}")]) from None
         config = self.config_code()
         tables, manifest = self.tables_and_manifest()
         out.append("/* ---- variable wrappers */")
@@ -317,6 +323,12 @@ class CodeGen:
             for r in cfg.resources:
                 for inst in r.programs:
                     lines.append(f"static {inst.pou.ty.cname} {r.key}__{inst.key};")
+        # the force flags of each global, for writes through VAR_EXTERNAL (0: none, for unbound ones)
+        flags = ["&__no_gflag"] + [f"&{cname}.flags" for cname, _, v, _ in self.global_vars() if not v.is_fb_instance]
+        self.gflag_index = {cname: i + 1 for i, (cname, _, v, _) in
+                            enumerate(g for g in self.global_vars() if not g[2].is_fb_instance)}
+        lines.append("static BYTE __no_gflag;")
+        lines.append(f"static BYTE *const __gflags[] = {{{', '.join(flags)}}};")
         lines.append("")
         return lines
 
@@ -380,7 +392,7 @@ class CodeGen:
             cases = self.external_targets(v)
             if cases:
                 lines.append("  switch (res__) {")
-                for idx, target in cases:
+                for idx, target, _ in cases:
                     lines.append(f"  case {idx}: {prefix}{v.key} = &{target}; break;")
                 lines.append("  }")
             return lines
@@ -395,12 +407,14 @@ class CodeGen:
             return lines
         if v.kind == "VAR_EXTERNAL":
             lines.append(f"  {prefix}{v.key}.flags = 0;")
+            lines.append(f"  {prefix}{v.key}.gflag = 0;")
             lines.append(f"  {prefix}{v.key}.value = 0;")
             cases = self.external_targets(v)
             if cases:
                 lines.append("  switch (res__) {")
-                for idx, target in cases:
-                    lines.append(f"  case {idx}: {prefix}{v.key}.value = &{target}; break;")
+                for idx, target, gcname in cases:
+                    lines.append(f"  case {idx}: {prefix}{v.key}.value = &{target}; "
+                                 f"{prefix}{v.key}.gflag = {self.gflag_index[gcname]}; break;")
                 lines.append("  }")
             return lines
         val = self.value_of(v.init, v.ty) if v.init is not None else self.default_value(v.ty)
@@ -422,7 +436,8 @@ class CodeGen:
             return f"  {{ static const {cname_of(tb)} __init = {self.c_init(tb, val)}; {place} = __init; }}"
         return f"  {place} = {self.c_value_expr(tb, val)};"
 
-    def external_targets(self, v: Var) -> list[tuple[int, str]]:
+    def external_targets(self, v: Var) -> list[tuple[int, str, str]]:
+        """(resource index, C lvalue of the global's value, C name of the global) for each resource."""
         cfg = self.prog.config
         if cfg is None:
             return []
@@ -437,9 +452,9 @@ class CodeGen:
                     continue
                 target = f"{cfg.key}__{g.key}"
             if g.is_fb_instance:
-                out.append((i, target))
+                out.append((i, target, target))
             else:
-                out.append((i, f"(*{target}.value)" if g.location else f"{target}.value"))
+                out.append((i, f"(*{target}.value)" if g.location else f"{target}.value", target))
         return out
 
     def body_code(self, p: PouSym) -> list[str]:
@@ -479,7 +494,9 @@ class CodeGen:
                 if v.kind == "VAR_EXTERNAL":
                     return f"(*data__->{v.key})", None
                 return f"data__->{v.key}", None
-            if v.kind == "VAR_EXTERNAL" or v.location:
+            if v.kind == "VAR_EXTERNAL":
+                return f"(*data__->{v.key}.value)", self.external_flags(f"data__->{v.key}")
+            if v.location:
                 return f"(*data__->{v.key}.value)", f"data__->{v.key}.flags"
             return f"data__->{v.key}.value", f"data__->{v.key}.flags"
         if isinstance(e, A.Member):
@@ -489,7 +506,9 @@ class CodeGen:
                 v = e.sym
                 if v.is_fb_instance:
                     return f"{bp}.{v.key}", None
-                if v.location or v.kind == "VAR_EXTERNAL":
+                if v.kind == "VAR_EXTERNAL":
+                    return f"(*{bp}.{v.key}.value)", self.external_flags(f"{bp}.{v.key}")
+                if v.location:
                     return f"(*{bp}.{v.key}.value)", f"{bp}.{v.key}.flags"
                 return f"{bp}.{v.key}.value", f"{bp}.{v.key}.flags"
             return f"{bp}.{e.sym.key}", bflags
@@ -499,6 +518,11 @@ class CodeGen:
             idx = "".join(f"[{self.index(i, lo, hi)}]" for i, (lo, hi) in zip(e.indices, arr.dims))
             return f"{bp}.table{idx}", bflags
         raise AssertionError(f"not a place: {e}")
+
+    @staticmethod
+    def external_flags(wrapper: str) -> str:
+        """The force flags guarding a write through a VAR_EXTERNAL: its own and its global's."""
+        return f"({wrapper}.flags | *__gflags[{wrapper}.gflag])"
 
     def index(self, e: A.Node, lo: int, hi: int) -> str:
         if isinstance(e, A.Literal):
@@ -676,6 +700,8 @@ class CodeGen:
         return str(self.label)
 
     def st_For(self, s: A.For) -> None:
+        # a step of 0 counts as downward, as in MatIEC's C (`by > 0 ? up : down`): the loop runs while the
+        # control variable is >= the end, i.e. never or until an EXIT
         n = self.new_label()
         t = s.var.ty.base()
         wide = "__int128" if t.bits == 64 else "long long"
@@ -684,7 +710,7 @@ class CodeGen:
         step = self.expr(s.step) if s.step is not None else "1"
         self.emit(f"{{ {wide} __e{n} = ({wide})({self.expr(s.end)}), __b{n} = ({wide})({step});")
         self.indent += 1
-        self.emit(f"if (__b{n} >= 0 ? ({wide}){cvar} <= __e{n} : ({wide}){cvar} >= __e{n}) for (;;) {{")
+        self.emit(f"if (__b{n} > 0 ? ({wide}){cvar} <= __e{n} : ({wide}){cvar} >= __e{n}) for (;;) {{")
         self.indent += 1
         self.loops.append((f"__exit{n}", f"__cont{n}"))
         self.statements(s.body)
@@ -694,7 +720,7 @@ class CodeGen:
         self.emit(f"{{ {wide} __n{n} = ({wide}){cvar} + __b{n};")
         self.indent += 1
         self.store(cvar, flags, t, f"({cname_of(t)})__n{n}")
-        self.emit(f"if (__b{n} >= 0 ? __n{n} > __e{n} : __n{n} < __e{n}) break; }}")
+        self.emit(f"if (__b{n} > 0 ? __n{n} > __e{n} : __n{n} < __e{n}) break; }}")
         self.indent -= 1
         self.indent -= 1
         self.emit("}")
@@ -787,10 +813,22 @@ class CodeGen:
         return f"(({t.cname})(0 - ({u}){a}))"
 
     def ex_BinOp(self, e: A.BinOp) -> str:
+        # a left-associative chain (a sum of 5000 terms) is walked iteratively: its left operands nest
+        # without bound (gcc takes the nested C in its stride)
+        spine = [e]
+        while isinstance(spine[-1].left, A.BinOp):
+            spine.append(spine[-1].left)
+        acc = self.expr(spine[-1].left)
+        for node in reversed(spine):
+            acc = self.binop(node, acc)
+        return acc
+
+    def binop(self, e: A.BinOp, a: str) -> str:
+        """C of `e`, its left operand's C being `a`."""
         op = e.op
         if getattr(e, "time", False):
-            return self.time_binop(e)
-        a, b = self.expr(e.left), self.expr(e.right)
+            return self.time_binop(e, a)
+        b = self.expr(e.right)
         if op in ("=", "<>", "<", ">", "<=", ">="):
             cop = {"=": "==", "<>": "!="}.get(op, op)
             lt = e.left.ty.base()
@@ -815,8 +853,8 @@ class CodeGen:
         u = "unsigned long long" if t.bits == 64 else "unsigned"
         return f"(({t.cname})(({u}){a} {op} ({u}){b}))"
 
-    def time_binop(self, e: A.BinOp) -> str:
-        a, b = self.expr(e.left), self.expr(e.right)
+    def time_binop(self, e: A.BinOp, a: str) -> str:
+        b = self.expr(e.right)
         op = e.op
         if op in ("+", "-"):
             return f"({a} {op} {b})"
@@ -923,7 +961,7 @@ class CodeGen:
             fake = A.BinOp(e.pos, op, args[0], args[1])
             fake.ty = e.ty
             fake.time = True
-            return self.time_binop(fake)
+            return self.time_binop(fake, self.expr(args[0]))
         # a REAL argument is rounded to REAL, as when MatIEC passes it to its C function
         cs = [f"((REAL)({self.expr(a)}))" if a.ty is not None and a.ty.base() is T.REAL else self.expr(a)
               for a in args]

@@ -221,6 +221,13 @@ class Pseudo(Type):
         return self.default.cname
 
 
+class ErrorType(Type):
+    """The type of a name whose declaration was rejected: its uses are not checked (nor reported)."""
+    name = cname = "<error>"
+
+
+ERROR = ErrorType()
+
 LIT_INT = Pseudo("integer literal", INTS + BITS, DINT, True)
 LIT_REAL = Pseudo("real literal", REALS, LREAL, True)
 

@@ -120,7 +120,8 @@ static unsigned long context_pc(void *ctx)
 static int kind_of(int sig, const siginfo_t *info)
 {
     switch (sig) {
-    case SIGFPE: return (info && info->si_code == FPE_INTDIV) ? 1 : 3;
+    /* integer division by zero, and MIN / -1 (x86 reports both as FPE_INTDIV; other CPUs say FPE_INTOVF) */
+    case SIGFPE: return (info && (info->si_code == FPE_INTDIV || info->si_code == FPE_INTOVF)) ? 1 : 3;
     case SIGILL: return 2;   /* the trapping bounds sanitizer: the only source of SIGILL in PLC code */
     default: return 4;
     }
