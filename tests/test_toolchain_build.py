@@ -162,22 +162,66 @@ def test_error_in_an_included_file_names_that_file(backend, tmp_path):
         info.value.diagnostics
 
 
-def test_iec2c_crash_is_a_compile_error(tmp_path, monkeypatch):
-    """MatIEC segfaults (exit 139) after some syntax errors: any non-zero exit is a failure, with its messages.
-    A stand-in iec2c that prints a message and dies of SIGSEGV checks this without MatIEC."""
+def _fake_iec2c(tmp_path, monkeypatch, script: str) -> None:
+    """A stand-in iec2c (a shell script) with an empty library folder, found through IEC2C."""
     fake = tmp_path / "matiec" / "iec2c"
     (tmp_path / "matiec" / "lib" / "C").mkdir(parents=True)
     (tmp_path / "matiec" / "lib" / "ieclib.txt").write_text("")
-    fake.write_text('#!/bin/sh\necho "prog.st:2-5..2-7: error: invalid external variable declaration." >&2\n'
-                    'kill -SEGV $$\n')
+    fake.write_text("#!/bin/sh\n" + script)
     fake.chmod(0o755)
     monkeypatch.setenv("IEC2C", str(fake))
     monkeypatch.delenv("MATIEC_HOME", raising=False)
+
+
+def test_iec2c_crash_is_a_compile_error(tmp_path, monkeypatch):
+    """MatIEC segfaults (exit 139) after some syntax errors: any non-zero exit is a failure, with its messages.
+    A stand-in iec2c that prints a message and dies of SIGSEGV checks this without MatIEC."""
+    _fake_iec2c(tmp_path, monkeypatch, 'echo "prog.st:2-5..2-7: error: invalid external variable declaration." >&2\n'
+                                       'kill -SEGV $$\n')
     with pytest.raises(CompileError) as info:
         build_text("PROGRAM Main\nEND_PROGRAM\n", tmp_path, "matiec")
     diags = info.value.diagnostics
     assert diags[0] == "prog.st:2:5: error: invalid external variable declaration."
-    assert any(DIAGNOSTIC.match(d) and "crashed (signal 11)" in d for d in diags), diags
+    assert any(DIAGNOSTIC.match(d) and "iec2c crashed (SIGSEGV)" in d for d in diags), diags
+
+
+@pytest.mark.parametrize("signal_name, wording", [
+    ("TERM", "iec2c was stopped from outside (SIGTERM)"),
+    ("KILL", "iec2c was killed (SIGKILL): out of memory, or killed from outside"),
+    ("ABRT", "iec2c aborted (SIGABRT)"),
+])
+def test_iec2c_signals_are_worded_by_signal(tmp_path, monkeypatch, signal_name, wording):
+    """Only a segfault is MatIEC's known reaction to bad syntax; a killed iec2c is not called a crash."""
+    _fake_iec2c(tmp_path, monkeypatch, f"kill -{signal_name} $$\n")
+    with pytest.raises(CompileError) as info:
+        build_text("PROGRAM Main\nEND_PROGRAM\n", tmp_path, "matiec")
+    diags = info.value.diagnostics
+    assert any(DIAGNOSTIC.match(d) and wording in d for d in diags), diags
+    assert not any("syntax errors" in d for d in diags), diags
+
+
+def test_iec2c_has_a_time_limit(tmp_path, monkeypatch):
+    """iec2c runs at most LINMOT_ST_IEC2C_TIMEOUT seconds (120 by default): MatIEC takes minutes on huge arrays."""
+    _fake_iec2c(tmp_path, monkeypatch, '[ "$1" = "-h" ] && exit 0\nexec sleep 30\n')
+    monkeypatch.setenv("LINMOT_ST_IEC2C_TIMEOUT", "0.5")
+    t0 = time.perf_counter()
+    with pytest.raises(CompileError) as info:
+        build_text("PROGRAM Main\nEND_PROGRAM\n", tmp_path, "matiec")
+    assert time.perf_counter() - t0 < 10
+    assert DIAGNOSTIC.match(info.value.diagnostics[0])
+    assert "iec2c did not finish within 0.5 s" in info.value.diagnostics[0]
+    assert "LINMOT_ST_IEC2C_TIMEOUT" in info.value.diagnostics[0]
+    monkeypatch.setenv("LINMOT_ST_IEC2C_TIMEOUT", "soon")
+    with pytest.raises(CompileError, match="LINMOT_ST_IEC2C_TIMEOUT='soon': expected a number of seconds"):
+        build_text("PROGRAM Main\nEND_PROGRAM\n", tmp_path, "matiec")
+
+
+def test_default_iec2c_time_limit(monkeypatch):
+    from linmot_st.toolchain import matiec
+    monkeypatch.delenv("LINMOT_ST_IEC2C_TIMEOUT", raising=False)
+    assert matiec.timeout_s() == 120
+    monkeypatch.setenv("LINMOT_ST_IEC2C_TIMEOUT", "0")
+    assert matiec.timeout_s() is None
 
 
 def test_auto_picks_builtin_without_iec2c(monkeypatch, tmp_path):

@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import os
+import shutil
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -76,7 +79,7 @@ def test_run_every_and_fault(project, backend, capsys):
     assert main(["run", str(project), "--backend", backend, "--cycles", "4", "--set", "INST0.FAULT=True",
                  "--watch", "INST0.N"]) == 3
     captured = capsys.readouterr()
-    assert "division by zero in POU MAIN" in captured.err
+    assert "integer division by zero or overflow (MIN / -1) in POU MAIN" in captured.err
 
 
 @pytest.mark.parametrize("backend", BACKEND_PARAMS)
@@ -89,13 +92,70 @@ def test_bad_watch_and_compile_error(project, backend, capsys, tmp_path):
 
 
 def test_auto_says_which_backend(project, capsys):
-    main(["build", str(project)])
-    assert "backend: " in capsys.readouterr().err
+    from linmot_st.toolchain import choose_backend
+    chosen = choose_backend("auto")
+    assert main(["build", str(project)]) == 0
+    captured = capsys.readouterr()
+    assert f"backend: {chosen} (auto: iec2c {'found' if chosen == 'matiec' else 'not found'})" in captured.err
+    assert f"compiled with {chosen}" in captured.out or f"cached with {chosen}" in captured.out
 
 
 def test_console_script_help():
     proc = subprocess.run([sys.executable, "-m", "linmot_st.cli", "run", "--help"], capture_output=True, text=True)
     assert proc.returncode == 0 and "--cycles" in proc.stdout and "--watch" in proc.stdout
+
+
+def _installed_script() -> str:
+    """The `linmot-st` console script of the environment running the tests (pip installs it beside python)."""
+    beside = Path(sys.executable).parent / "linmot-st"
+    found = str(beside) if beside.is_file() else shutil.which("linmot-st")
+    if not found:
+        pytest.skip("no installed linmot-st script (the package is not pip-installed here)")
+    return found
+
+
+def test_installed_console_script_builds_and_runs(project, tmp_path):
+    script = _installed_script()
+    env = dict(os.environ, LINMOT_ST_CACHE=str(tmp_path / "cache"))
+    proc = subprocess.run([script, "run", str(project), "--backend", "builtin", "--cycles", "3", "--watch", "INST0.N"],
+                          capture_output=True, text=True, env=env)
+    assert proc.returncode == 0, proc.stderr
+    assert "CONFIG0.RES0.INST0.N = 3" in proc.stdout
+
+
+def test_a_bad_path_exits_2_with_a_plain_message(tmp_path, capsys):
+    missing = tmp_path / "nonexistent.st"
+    assert main(["build", str(missing), "--backend", "builtin"]) == 2
+    err = capsys.readouterr().err
+    assert f"error: {missing}: no such file or folder" in err
+    assert ":1:1:" not in err                 # no made-up source position
+    assert main(["run", str(tmp_path), "--backend", "builtin", "--cycles", "1"]) == 2
+    assert "needs an entry file plc.st" in capsys.readouterr().err
+    proc = subprocess.run([_installed_script(), "build", str(missing), "--backend", "builtin"],
+                          capture_output=True, text=True)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+
+
+def test_internal_compiler_error_is_reported_not_raised(project, monkeypatch, capsys, tmp_path):
+    """An unexpected exception inside a backend is a clear message naming the file; the traceback is shown
+    with --verbose (or LINMOT_ST_TRACEBACK=1)."""
+    from linmot_st.toolchain import builtin
+
+    def broken(*args, **kwargs):
+        raise ZeroDivisionError("a bug in the compiler")
+
+    monkeypatch.setattr(builtin, "compile_to_c", broken)
+    monkeypatch.delenv("LINMOT_ST_TRACEBACK", raising=False)
+    assert main(["build", str(project), "--backend", "builtin", "--no-cache"]) == 1
+    err = capsys.readouterr().err
+    assert "plc.st: error: internal compiler error of the builtin backend: ZeroDivisionError: a bug in the compiler" in err
+    assert "--verbose" in err and "Traceback" not in err
+    assert main(["build", str(project), "--backend", "builtin", "--no-cache", "--verbose"]) == 1
+    err = capsys.readouterr().err
+    assert "Traceback (most recent call last)" in err and "in broken" in err
+    monkeypatch.setenv("LINMOT_ST_TRACEBACK", "1")
+    assert main(["run", str(project), "--backend", "builtin", "--cycles", "1"]) == 1
+    assert "Traceback (most recent call last)" in capsys.readouterr().err
 
 
 def test_bench_verdicts():

@@ -36,6 +36,20 @@ class CompileError(Exception):
         super().__init__("\n".join(self.diagnostics))
 
 
+class SourcePathError(CompileError):
+    """The path given to build() is not a .st file nor a project folder: nothing was compiled, so the
+    message is a plain sentence, without a source position."""
+
+
+class InternalCompilerError(CompileError):
+    """A backend failed in a way it should not (a bug of this project). The original exception is the
+    `__cause__`; the CLI prints its traceback with --verbose or LINMOT_ST_TRACEBACK=1."""
+
+
+TRACEBACK_ENV = "LINMOT_ST_TRACEBACK"
+FAILED_KEPT = 5     # failed builds whose generated C is kept for reading (build/cache/failed-<key>)
+
+
 @dataclass
 class BuildResult:
     library: Path
@@ -87,7 +101,7 @@ def build(path: str | os.PathLike, backend: str = "auto", out: str | os.PathLike
     try:
         src = _sources.collect(path)
     except _sources.SourceError as exc:
-        raise CompileError([f"{path}:1:1: error: {exc}"], chosen) from None
+        raise SourcePathError([f"error: {exc}"], chosen) from None
 
     if chosen == "matiec":
         from . import matiec
@@ -109,7 +123,7 @@ def build(path: str | os.PathLike, backend: str = "auto", out: str | os.PathLike
             raise CompileError([f"{src.entry}:1:1: error: the builtin compiler is not available: {exc}"],
                                chosen) from None
         builtin_dir = _TOOLCHAIN_DIR / "builtin"
-        generator = [p for p in builtin_dir.rglob("*") if p.suffix in (".py", ".lark", ".c", ".h")]
+        generator = [p for p in builtin_dir.rglob("*") if p.suffix in (".py", ".lark", ".c", ".h", ".json")]
         version_fn = getattr(builtin, "backend_version", None)
         backend_version = version_fn() if callable(version_fn) else "builtin-" + _code_digest(generator)[:16]
         flags = []
@@ -126,7 +140,7 @@ def build(path: str | os.PathLike, backend: str = "auto", out: str | os.PathLike
         "sources": {_sources.rel_name(f, src.root): _cache.file_digest(f) for f in src.files},
         "missing": src.missing,
     })
-    store = _cache.Cache(Path(cache_dir) if cache_dir else _cache.default_dir(src.root))
+    store = _cache.Cache(Path(cache_dir) if cache_dir else _cache.default_dir(src.root, src.in_tree))
     entry = store.lookup(key) if use_cache else None
     cached = entry is not None
     if entry is None:
@@ -153,6 +167,8 @@ def _compile(chosen: str, tool, src: _sources.Sources, store: _cache.Cache, key:
                 manifest, units, plain_units = matiec.generate(tool, src, c_dir, backend_version)
             except matiec.MatiecError as exc:
                 raise CompileError(exc.diagnostics, chosen) from None
+            except Exception as exc:
+                raise _internal(exc, chosen, src) from exc
             unit_flags = {u: _matiec_unit_flags() for u in units}
             all_units = units + plain_units
             include_dirs = [c_dir, tool.include]
@@ -168,10 +184,17 @@ def _compile(chosen: str, tool, src: _sources.Sources, store: _cache.Cache, key:
             cc.compile_shared(all_units + cc.GLUE_SOURCES, staging / _cache.LIBRARY_NAME,
                               include_dirs=include_dirs, unit_flags=unit_flags, cwd=src.root)
         except cc.CCompileError as exc:
+            kept = _keep_failed(store, key, staging)
+            text = str(exc)
             diags = exc.diagnostics or [f"{src.entry_rel}:1:1: error: {exc}"]
+            if kept is not None:    # the staging folder is about to go: point into the kept copy
+                diags = [d.replace(str(staging), str(kept)) for d in diags]
+                text = text.replace(str(staging), str(kept))
             if chosen == "matiec":
                 diags = _explain_matiec_c_errors(diags)
-            raise CompileError(diags + ["(the C compiler rejected the generated C)", str(exc)], chosen) from None
+            where = f"kept in {kept / 'c'}" if kept is not None else "not kept"
+            raise CompileError(diags + [f"note: the C compiler rejected the C that {chosen} generated from "
+                                        f"{src.entry_rel} (the C is {where})", text], chosen) from None
         for o in staging.glob("*.o"):
             o.unlink()
         meta = {"backend": chosen, "backend_version": backend_version, "entry": str(src.entry),
@@ -180,6 +203,31 @@ def _compile(chosen: str, tool, src: _sources.Sources, store: _cache.Cache, key:
     except BaseException:
         store.discard(staging)
         raise
+
+
+def _keep_failed(store: _cache.Cache, key: str, staging: Path) -> Path | None:
+    """Move a failed build's staging folder to `failed-<key>` beside the entries, keeping the last few."""
+    target = store.folder / f"failed-{key[:16]}"
+    try:
+        shutil.rmtree(target, ignore_errors=True)
+        os.rename(staging, target)
+        os.utime(target)
+    except OSError:
+        return None
+    old = sorted(store.folder.glob("failed-*"), key=lambda p: p.stat().st_mtime if p.exists() else 0)
+    for p in old[:-FAILED_KEPT]:
+        shutil.rmtree(p, ignore_errors=True)
+    return target
+
+
+def _internal(exc: BaseException, backend: str, src: _sources.Sources) -> InternalCompilerError:
+    """An unexpected exception of a backend, reported with the file it was compiling."""
+    detail = str(exc).splitlines()[0] if str(exc) else ""
+    return InternalCompilerError(
+        [f"{src.entry_rel}: error: internal compiler error of the {backend} backend: {type(exc).__name__}"
+         + (f": {detail}" if detail else ""),
+         f"note: this is a bug of linmot-st, not of the ST; --verbose (or {TRACEBACK_ENV}=1) shows the traceback"],
+        backend)
 
 
 _MISSING_WRAPPER = re.compile(r"implicit declaration of function .__\w+?\d+.")
@@ -217,7 +265,7 @@ def _builtin_generate(src: _sources.Sources, c_dir: Path) -> tuple[dict, list[Pa
         if error_cls and isinstance(exc, error_cls):
             diags = [str(d) for d in (getattr(exc, "diagnostics", None) or [])] or str(exc).splitlines()
             raise CompileError(diags, "builtin") from None
-        raise
+        raise _internal(exc, "builtin", src) from exc
     manifest = getattr(out, "manifest", None)
     if isinstance(manifest, (str, Path)):
         manifest = json.loads(Path(manifest).read_text())
@@ -244,4 +292,4 @@ def say(message: str) -> None:
     print(message, file=sys.stderr)
 
 
-__all__ = ["build", "BuildResult", "CompileError", "choose_backend", "matiec_available", "builtin_available"]
+__all__ = ["build", "BuildResult", "CompileError", "SourcePathError", "InternalCompilerError", "choose_backend", "matiec_available", "builtin_available"]

@@ -25,9 +25,18 @@ MANIFEST_NAME = "manifest.json"
 META_NAME = "meta.json"
 
 
-def default_dir(root: Path) -> Path:
+def default_dir(root: Path, in_tree: bool = True) -> Path:
+    """$LINMOT_ST_CACHE; else build/cache in a library tree (`make clean` removes it); else, for a file
+    outside any tree, the user's cache folder ($XDG_CACHE_HOME/linmot-st or ~/.cache/linmot-st) rather
+    than a build/ folder in whatever directory the command ran from."""
     env = os.environ.get("LINMOT_ST_CACHE")
-    return Path(env).expanduser() if env else root / "build" / "cache"
+    if env:
+        return Path(env).expanduser()
+    if in_tree:
+        return root / "build" / "cache"
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    base = Path(xdg).expanduser() if xdg and Path(xdg).is_absolute() else Path.home() / ".cache"
+    return base / "linmot-st"
 
 
 def file_digest(path: Path) -> str:

@@ -33,10 +33,22 @@ def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument("path", metavar="PATH", help="a .st file or a project folder (entry file plc.st)")
     p.add_argument("--backend", choices=["auto", "matiec", "builtin"], default="auto",
                    help="auto: matiec when iec2c is found, else builtin (default)")
+    p.add_argument("--verbose", action="store_true",
+                   help="on an internal compiler error, also print its traceback (or set LINMOT_ST_TRACEBACK=1)")
+
+
+class _Failed(Exception):
+    """The build failed; `code` is the exit status (1 compile error, 2 bad path)."""
+
+    def __init__(self, code: int):
+        self.code = code
 
 
 def _build(args, out=None, use_cache=True):
-    from . import CompileError, build, choose_backend
+    """The build result; raises _Failed after printing the diagnostics."""
+    import os
+
+    from . import TRACEBACK_ENV, CompileError, InternalCompilerError, SourcePathError, build, choose_backend
     chosen = choose_backend(args.backend)
     if args.backend == "auto":
         why = "iec2c found" if chosen == "matiec" else "iec2c not found"
@@ -46,16 +58,22 @@ def _build(args, out=None, use_cache=True):
     except CompileError as exc:
         for line in exc.diagnostics:
             print(line, file=sys.stderr)
-        return None
+        if isinstance(exc, InternalCompilerError) and exc.__cause__ is not None and (
+                getattr(args, "verbose", False) or os.environ.get(TRACEBACK_ENV, "") not in ("", "0")):
+            import traceback
+            traceback.print_exception(type(exc.__cause__), exc.__cause__, exc.__cause__.__traceback__,
+                                      file=sys.stderr)
+        raise _Failed(2 if isinstance(exc, SourcePathError) else 1) from None
     for w in res.warnings:
         print(f"warning: {w}", file=sys.stderr)
     return res
 
 
 def cmd_build(args) -> int:
-    res = _build(args, out=args.out, use_cache=not args.no_cache)
-    if res is None:
-        return 1
+    try:
+        res = _build(args, out=args.out, use_cache=not args.no_cache)
+    except _Failed as failed:
+        return failed.code
     how = "cached" if res.cached else "compiled"
     print(f"{res.entry}: {how} with {res.backend} in {res.seconds:.3f} s")
     print(f"  library:  {res.library}")
@@ -76,9 +94,10 @@ def cmd_run(args) -> int:
     if args.cycles < 0:
         print("error: --cycles must be >= 0", file=sys.stderr)
         return 2
-    res = _build(args)
-    if res is None:
-        return 1
+    try:
+        res = _build(args)
+    except _Failed as failed:
+        return failed.code
     plc = Plc(res)
     try:
         watched = [plc.var(w) for w in args.watch]

@@ -74,8 +74,11 @@ def find() -> Matiec | None:
 def flags(iec2c: Path) -> tuple[str, ...]:
     """Beremiz's choice: whichever of -f -l -p the help lists; plus, when listed, `-O l` (#line
     directives into the ST files, so gcc errors and the debug line table point at ST lines) and `-O p`."""
-    proc = subprocess.run([str(iec2c), "-h"], capture_output=True, text=True, check=False)
-    help_text = proc.stdout + proc.stderr
+    try:
+        proc = subprocess.run([str(iec2c), "-h"], capture_output=True, text=True, check=False, timeout=30)
+        help_text = proc.stdout + proc.stderr
+    except subprocess.TimeoutExpired:
+        help_text = ""
     chosen = [f for f in WANTED_FLAGS if re.search(rf"^\s*{f}\b", help_text, re.M)]
     if re.search(r"^\s*-O\b", help_text, re.M):
         # p: one .c per POU, so the POUs compile in parallel units (generate() groups them)
@@ -120,18 +123,59 @@ def diagnostics_from(stderr: str, entry: str, rc: int) -> list[str]:
             out.append(f"{entry}:1:1: error: iec2c: {line}")
     if rc < 0 or rc >= 128:
         sig = -rc if rc < 0 else rc - 128
-        out.append(f"{entry}:1:1: error: iec2c crashed (signal {sig}); MatIEC does this after some syntax "
-                   f"errors, e.g. a reserved word (a standard function or type name) used as an identifier")
+        out.append(f"{entry}:1:1: error: {signal_message(sig)}")
     if not out:
         out.append(f"{entry}:1:1: error: iec2c failed with exit code {rc}")
     return out
+
+
+def signal_message(sig: int) -> str:
+    """What it means when iec2c ends on a signal."""
+    import signal as _signal
+    try:
+        name = _signal.Signals(sig).name
+    except ValueError:
+        name = f"signal {sig}"
+    if sig == _signal.SIGSEGV:
+        return ("iec2c crashed (SIGSEGV); MatIEC does this after some syntax errors, e.g. a reserved word "
+                "(a standard function or type name) used as an identifier")
+    if sig == _signal.SIGABRT:
+        return "iec2c aborted (SIGABRT): an internal check of MatIEC failed on this input"
+    if sig == _signal.SIGKILL:
+        return "iec2c was killed (SIGKILL): out of memory, or killed from outside"
+    if sig in (_signal.SIGTERM, _signal.SIGINT, _signal.SIGHUP):
+        return f"iec2c was stopped from outside ({name})"
+    return f"iec2c ended on {name}"
+
+
+TIMEOUT_ENV = "LINMOT_ST_IEC2C_TIMEOUT"
+DEFAULT_TIMEOUT_S = 120.0     # st_lib takes about 2 s; MatIEC needs minutes for arrays of 10^8 elements
+
+
+def timeout_s() -> float | None:
+    """iec2c's time limit in seconds: $LINMOT_ST_IEC2C_TIMEOUT (0: none), else 120."""
+    text = os.environ.get(TIMEOUT_ENV, "").strip()
+    if not text:
+        return DEFAULT_TIMEOUT_S
+    try:
+        value = float(text)
+    except ValueError:
+        raise MatiecError(f"{TIMEOUT_ENV}={text!r}: expected a number of seconds") from None
+    return value if value > 0 else None
 
 
 def run_iec2c(m: Matiec, sources: Sources, out_dir: Path) -> list[Path]:
     """Compile the entry file into out_dir; returns the generated files iec2c lists."""
     out_dir.mkdir(parents=True, exist_ok=True)
     argv = [str(m.iec2c), *flags(m.iec2c), "-I", str(m.lib), "-T", str(out_dir), sources.entry_rel]
-    proc = subprocess.run(argv, cwd=sources.root, capture_output=True, text=True, check=False)
+    limit = timeout_s()
+    try:
+        proc = subprocess.run(argv, cwd=sources.root, capture_output=True, text=True, check=False, timeout=limit)
+    except subprocess.TimeoutExpired:
+        msg = (f"{sources.entry_rel}:1:1: error: iec2c did not finish within {limit:g} s and was stopped "
+               f"(set {TIMEOUT_ENV} to a longer time in seconds, or 0 for none; MatIEC takes minutes on "
+               f"very large arrays)")
+        raise MatiecError(msg, [msg]) from None
     if proc.returncode != 0:
         diags = diagnostics_from(proc.stderr + ("\n" + proc.stdout if proc.returncode != 1 else ""),
                                  sources.entry_rel, proc.returncode)

@@ -33,6 +33,11 @@ class Sources:
     missing: list[str] = field(default_factory=list)    # include paths that resolve to no file
 
     @property
+    def in_tree(self) -> bool:
+        """Whether the include root is a library tree (it holds st_lib/linmot.st), not just the cwd."""
+        return (self.root / LIBRARY_MARKER).is_file()
+
+    @property
     def entry_rel(self) -> str:
         """The entry file as iec2c is given it: relative to the include root where possible."""
         return rel_name(self.entry, self.root)
