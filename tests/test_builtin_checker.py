@@ -256,7 +256,14 @@ def test_sources_lists_every_file_read(tmp_path: Path):
 
 
 def test_other_pragmas_are_rejected():
-    assert "pragma" in one_error("{disable code generation}\nTYPE t_a : INT; END_TYPE\n")
+    e = one_error("{attribute 'hide'}\nTYPE t_a : INT; END_TYPE\n")
+    assert "pragma \"{attribute 'hide'}\" is outside the supported subset" in e
+    assert "{disable code generation} and {enable code generation} are supported" in e
+
+
+def test_code_generation_pragmas_are_matiecs_spelling_in_any_case():
+    check_text("{Disable Code Generation}\nTYPE t_a : INT; END_TYPE\n{ENABLE CODE GENERATION}\n")
+    assert "pragma" in one_error("{disable  code generation}\nTYPE t_a : INT; END_TYPE\n")
 
 
 def test_the_library_passes_the_checker():

@@ -497,7 +497,8 @@ def generate(m: Matiec, sources: Sources, out_dir: Path, backend_version: str) -
     if "#endif //__POUS_H" not in text:   # iec2c writes it only when it meets a CONFIGURATION
         pous_h.write_text(text.rstrip("\n") + "\n#endif //__POUS_H\n")
     pou_files = split_pous(out_dir)
-    config_units = [p for p in generated if p.suffix == ".c" and p.name != "POUS.c" and p.name not in pou_files]
+    config_units = [p for p in generated
+                    if p.suffix == ".c" and p.name != "POUS.c" and p.name not in (pou_files or ())]
     manifest, tables, roots = describe(out_dir, config_units, sources, m, backend_version)
     tables_path = out_dir / "plc_tables.c"
     tables_path.write_text(tables)

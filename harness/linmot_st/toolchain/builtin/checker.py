@@ -80,6 +80,11 @@ def _strtof():
     return fn
 
 
+# MatIEC's pragmas that turn the generation of C off and on for the POUs between them (types are still
+# generated): matched as its lexer does, case-insensitively and exactly as spelled
+DISABLE_CODE = re.compile(r"(?i)\{disable code generation\}")
+ENABLE_CODE = re.compile(r"(?i)\{enable code generation\}")
+
 LOCATION_RE = re.compile(r"%([IQM])([XBWDL]?)(\d+(?:\.\d+)*)$")
 SIZE_BITS = {"X": 1, "B": 8, "W": 16, "D": 32, "L": 64}
 
@@ -105,6 +110,7 @@ class Checker:
         self._std_mode = False
         self.config_names: set[str] = set()
         self.failed_pous: set[str] = set()   # POUs whose declaration was rejected: uses are not reported
+        self.code_generation = True          # off between {disable code generation} and {enable ...}
 
     # ------------------------------------------------------------------ diagnostics
     def error(self, pos: A.Pos, msg: str):
@@ -132,9 +138,14 @@ class Checker:
                     self.declare_pou(el)
                 elif isinstance(el, A.Configuration):
                     self.declare_config(el)
+                elif isinstance(el, A.Pragma) and DISABLE_CODE.fullmatch(el.text):
+                    self.code_generation = False
+                elif isinstance(el, A.Pragma) and ENABLE_CODE.fullmatch(el.text):
+                    self.code_generation = True
                 elif isinstance(el, A.Pragma):
-                    self.error(el.pos, f"pragma {el.text!r} is outside the supported subset "
-                                       "(only {#include \"file\"} is supported)")
+                    self.error(el.pos, f"pragma {el.text!r} is outside the supported subset (only "
+                                       "{#include \"file\"}, {disable code generation} and {enable code generation} "
+                                       "are supported)")
             except _Abort:
                 pass
         if self.diags:
@@ -224,6 +235,7 @@ class Checker:
         if k in self.pous:
             pou = self.pous[k]
             if pou.kind == "FUNCTION_BLOCK":
+                self.check_has_code(pou, spec.pos)
                 return pou.ty
             self.error(spec.pos, f"'{spec.name}' is a {pou.kind}, not a type")
         if k in stdfb.names():
@@ -457,7 +469,8 @@ class Checker:
     # ------------------------------------------------------------------ POUs
     def declare_pou(self, node: A.Pou) -> None:
         k = self.check_global_name(node.name, node.pos, node.kind.lower().replace("_", " "))
-        pou = PouSym(node.name, k, node.kind, node.pos, node, std=node.std)
+        pou = PouSym(node.name, k, node.kind, node.pos, node, std=node.std,
+                     no_code=not self.code_generation and not node.std)
         if node.kind != "FUNCTION":
             pou.ty = T.PouType(k, pou)
         saved = self.cur
@@ -731,6 +744,7 @@ class Checker:
         pou = self.pous.get(node.type_name.upper())
         if pou is None or pou.kind != "PROGRAM":
             self.error(node.type_pos, f"'{node.type_name}' is not a PROGRAM declared before the configuration")
+        self.check_has_code(pou, node.type_pos)
         task = None
         if node.task:
             task = next((t for t in res.tasks if t.key == node.task.upper()), None)
@@ -744,6 +758,13 @@ class Checker:
 
     def resolve_global(self, res: ResourceSym, key: str) -> Var | None:
         return res.globals.get(key) or res.config.globals.get(key)
+
+    def check_has_code(self, pou: PouSym, pos: A.Pos) -> None:
+        """A POU declared with code generation off can be used only by others declared so."""
+        if pou.no_code and not (self.cur is not None and self.cur.no_code):
+            self.error(pos, f"{pou.name} is declared between {{disable code generation}} and {{enable code "
+                            f"generation}}: no C is generated for it (by MatIEC either), so it cannot be "
+                            f"{'called' if pou.kind == 'FUNCTION' else 'instantiated'} here")
 
     def check_externals(self, pou: PouSym, res: ResourceSym, pos: A.Pos, seen: set) -> None:
         if pou.key in seen:
@@ -770,16 +791,15 @@ class Checker:
 
     # ------------------------------------------------------------------ bodies
     def check_body(self, pou: PouSym) -> None:
-        if not pou.std:
-            try:
-                nesting.check_body(pou.kind, pou.ast.body)
-            except nesting.TooDeep as exc:
-                hint = ("compute parts of it into variables first" if exc.what == "expression" else
-                        "move the inner part into a FUNCTION or FUNCTION_BLOCK, or flatten the conditions")
-                self.report(exc.pos, f"{exc.what} nested too deeply: MatIEC's parser keeps at most "
-                                     f"{nesting.LIMIT} symbols pending and this needs {exc.need} here; {hint}")
-                pou.checked = True
-                return
+        too_deep = [] if pou.std else nesting.check_body(pou.kind, pou.ast.body)
+        for exc in too_deep:
+            hint = ("compute parts of it into variables first" if exc.what == "expression" else
+                    "move the inner part into a FUNCTION or FUNCTION_BLOCK, or flatten the conditions")
+            self.report(exc.pos, f"{exc.what} nested too deeply: MatIEC's parser keeps at most "
+                                 f"{nesting.LIMIT} symbols pending and this needs {exc.need} here; {hint}")
+        if too_deep:     # the rest of the body is not checked: its walk could go as deep as its nesting
+            pou.checked = True
+            return
         saved = (self.cur, self.loops, self.for_vars)
         self.cur, self.loops, self.for_vars = pou, 0, []
         try:
@@ -900,6 +920,8 @@ class Checker:
             raise _Abort     # its declaration was rejected, and reported
         v = self.lookup_var(k)
         if v is not None:
+            if v.ty is T.ERROR:
+                raise _Abort     # its declaration was rejected, and reported
             if not v.is_fb_instance:
                 self.error(call.pos, f"'{call.name}' is not a function block instance")
             self.fb_call(call, v)
@@ -1415,6 +1437,7 @@ class Checker:
                 self.error(e.pos, f"recursive call of {pou.name} (recursion is outside the supported subset)")
             if not e.args:
                 self.error(e.pos, f"a call of FUNCTION {pou.name} needs at least one argument (MatIEC)")
+            self.check_has_code(pou, e.pos)
             bound = self.bind_args(e, pou.params, pou, allow_en=True)
             if isinstance(pou.return_type.base(), T.Struct):
                 outs = [p for p, _ in bound if p.kind in ("VAR_OUTPUT", "VAR_IN_OUT")]

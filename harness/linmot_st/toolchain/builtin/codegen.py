@@ -229,7 +229,7 @@ class CodeGen:
         out.append("/* ---- types */")
         for t in prog.types:
             out.extend(self.type_decl(t))
-        pous = [p for p in prog.pous]
+        pous = [p for p in prog.pous if not p.no_code]     # {disable code generation}: checked, not generated
         for p in pous:
             self.pou_ids[p.key] = f"__pou_{p.key}"
         # POU structs (their members need wrappers first)
@@ -1244,7 +1244,7 @@ class CodeGen:
         roots: list[tuple[str, str, str]] = []     # (path, type ref, C address expression)
         cfg = self.prog.config
         for p in self.prog.pous:
-            if p.kind != "FUNCTION":
+            if p.kind != "FUNCTION" and not p.no_code:
                 self.type_ref(p.ty, types)
         for t in self.prog.types:
             self.type_ref(t, types)
@@ -1297,7 +1297,7 @@ class CodeGen:
         lines += ["  default: return 0;", "  }", "}", ""]
         pous = {}
         for p in self.prog.pous:
-            if not p.std:
+            if not p.std and not p.no_code:
                 pous[p.key] = {"file": p.pos.file, "line": p.pos.line, "kind": p.kind}
         manifest = {
             "schema": 1,

@@ -31,7 +31,6 @@ LIMIT = 200
 # pending at the first statement of a body: the library, the POU header and its VAR blocks
 BODY_BASE = {"PROGRAM": 8, "FUNCTION_BLOCK": 8, "FUNCTION": 9}
 LATER_STATEMENT = 1        # the statement list before the second and later statements of a list
-SIMPLEST_STATEMENT = 3     # `x := y`
 
 # the innermost token: most need 1; a few literals are several tokens to MatIEC's lexer
 _LITERAL_COST = {"time": 8, "date": 6, "tod": 6, "dt": 8}
@@ -46,27 +45,42 @@ class TooDeep(Exception):
         self.pos, self.need, self.what = pos, need, what
 
 
-def check_body(kind: str, body: list[A.Node]) -> None:
-    """Raise TooDeep at the first point of a POU body where MatIEC's parser stack would overflow."""
-    # an explicit stack of (node or statement list, pending symbols, innermost statement, its depth):
-    # no recursion, whatever the input
-    todo: list[tuple[object, int, object, int]] = [(body, BODY_BASE.get(kind, 9), None, 0)]
+def check_body(kind: str, body: list[A.Node]) -> list[TooDeep]:
+    """Where MatIEC's parser stack would overflow in a POU body: the first point in each of its statements
+    that overflows, in source order (an empty list when the body fits)."""
+    base = BODY_BASE.get(kind, 9)
+    found = []
+    for i, s in enumerate(body):
+        d = base + (LATER_STATEMENT if i else 0)
+        problem = _first_overflow(s, d, base)
+        if problem is not None:
+            found.append(problem)
+    return found
+
+
+def _first_overflow(statement: A.Node, depth: int, base: int) -> TooDeep | None:
+    # an explicit stack of (node or statement list, pending symbols, innermost statement, its depth),
+    # children pushed in reverse so that they come off in source order: no recursion, whatever the input
+    todo: list[tuple[object, int, object, int]] = [(statement, depth, statement, depth)]
     while todo:
         node, depth, stmt, stmt_depth = todo.pop()
         if isinstance(node, list):       # a statement list: the first statement has no list before it
-            for i, s in enumerate(node):
+            for i, s in reversed(list(enumerate(node))):
                 d = depth + (LATER_STATEMENT if i else 0)
                 todo.append((s, d, s, d))
             continue
-        for child, extra, cost in _parts(node):
+        for child, extra, cost in reversed(_parts(node)):
             if child is None:            # a token: its own cost
-                if depth + extra + cost > LIMIT:
-                    # the statements alone overflow when even `x := y` would not fit where this one starts
-                    if stmt is not None and stmt_depth + SIMPLEST_STATEMENT > LIMIT:
-                        raise TooDeep(stmt.pos, stmt_depth + SIMPLEST_STATEMENT, "statements")
-                    raise TooDeep(node.pos, depth + extra + cost, "expression")
+                need = depth + extra + cost
+                if need > LIMIT:
+                    # the nesting of the statements is to blame when the innermost statement would fit
+                    # at the top of the body
+                    if need - stmt_depth + base <= LIMIT:
+                        return TooDeep(stmt.pos, need, "statements")
+                    return TooDeep(node.pos, need, "expression")
             else:
                 todo.append((child, depth + extra, stmt, stmt_depth))
+    return None
 
 
 def _parts(node) -> list[tuple[object, int, int]]:

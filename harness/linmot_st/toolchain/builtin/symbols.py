@@ -43,6 +43,7 @@ class PouSym:
     ty: T.PouType | None = None
     callees: set = field(default_factory=set)            # POUs whose bodies this one calls or instantiates
     checked: bool = False
+    no_code: bool = False      # declared between {disable code generation} and {enable code generation}
 
     def layout(self) -> list[Var]:
         """Struct members in C order (FB/PROGRAM): EN, ENO, the interface, then the private variables."""
