@@ -162,3 +162,22 @@ def test_bench_verdicts():
     assert verdict(2_000_000, ">= 1000000") == "ok"
     assert verdict(6.0, "<= 5") == "MISS"
     assert verdict(1, None) == ""
+
+
+def test_missing_c_compiler_and_unwritable_cache_are_plain_errors(project, monkeypatch, capsys, tmp_path):
+    from linmot_st.toolchain import cc
+    cc.find_compiler.cache_clear()
+    monkeypatch.setenv("CC", "no-such-c-compiler")
+    try:
+        assert main(["build", str(project), "--backend", "builtin", "--no-cache"]) == 1
+        err = capsys.readouterr().err
+        assert "error: no C compiler: 'no-such-c-compiler' is not on PATH" in err and "Traceback" not in err
+    finally:
+        monkeypatch.delenv("CC")
+        cc.find_compiler.cache_clear()
+    blocker = tmp_path / "not-a-folder"
+    blocker.write_text("")
+    monkeypatch.setenv("LINMOT_ST_CACHE", str(blocker / "cache"))
+    assert main(["build", str(project), "--backend", "builtin"]) == 1
+    err = capsys.readouterr().err
+    assert err.count("error: ") == 1 and "not-a-folder" in err and "Traceback" not in err

@@ -128,11 +128,15 @@ def build(path: str | os.PathLike, backend: str = "auto", out: str | os.PathLike
         backend_version = version_fn() if callable(version_fn) else "builtin-" + _code_digest(generator)[:16]
         flags = []
 
+    try:
+        compiler = cc.find_compiler()
+    except cc.CCompileError as exc:
+        raise CompileError([f"error: {exc}"], chosen) from None
     key = _cache.make_key({
         "backend": chosen,
         "backend_version": backend_version,
         "generator": _code_digest(generator + [_TOOLCHAIN_DIR / "cc.py"]),
-        "cc": cc.find_compiler().version,
+        "cc": compiler.version,
         "cflags": cc.BASE_FLAGS + cc.LINK_FLAGS + flags,
         "glue": _code_digest(cc.GLUE_SOURCES),
         "entry": src.entry_rel,

@@ -55,6 +55,9 @@ def _build(args, out=None, use_cache=True):
         print(f"backend: {chosen} (auto: {why})", file=sys.stderr)
     try:
         res = build(args.path, backend=args.backend, out=out, use_cache=use_cache)
+    except OSError as exc:      # the cache or output folder cannot be written, a source cannot be read...
+        print(f"error: {exc}", file=sys.stderr)
+        raise _Failed(1) from None
     except CompileError as exc:
         for line in exc.diagnostics:
             print(line, file=sys.stderr)
