@@ -517,7 +517,7 @@ def test_what_plcopen_cannot_hold_is_a_clear_error(tmp_path):
     entry = tmp_path / "st_lib" / "linmot.st"
     entry.parent.mkdir()
     entry.write_text(textwrap.dedent("""
-        PROGRAM P
+        PROGRAM Prog
           VAR_INPUT
             I : INT;
           END_VAR
@@ -529,7 +529,7 @@ def test_what_plcopen_cannot_hold_is_a_clear_error(tmp_path):
           END_VAR
           RESOURCE R ON PLC
             TASK T(INTERVAL := T#1ms, PRIORITY := 0);
-            PROGRAM Inst WITH T : P(I := G);
+            PROGRAM Inst WITH T : Prog(I := G);
           END_RESOURCE
         END_CONFIGURATION
         """))
