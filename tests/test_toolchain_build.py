@@ -331,3 +331,49 @@ def test_cache_commit_keeps_a_valid_entry_a_concurrent_builder_made(tmp_path):
     (third / MANIFEST_NAME).write_text("{}")
     cache.commit("ab" * 32, third, {"sources_read": {}})
     assert (entry / LIBRARY_NAME).read_text() == "third"
+
+
+def test_failed_c_is_kept_for_reading_and_bounded(tmp_path, monkeypatch):
+    """When gcc rejects generated C, the C stays in <cache>/failed-<key>/ (the last FAILED_KEPT builds) and
+    the diagnostics point there, not into a deleted staging folder; a note names the ST entry."""
+    import linmot_st.toolchain as toolchain
+
+    def broken_generate(src, c_dir):
+        unit = c_dir / "broken.c"
+        unit.write_text("int broken(void) { return undeclared_thing; }\n")
+        return {"schema": 1}, [unit], list(src.files)
+
+    monkeypatch.setattr(toolchain, "_builtin_generate", broken_generate)
+    cache = tmp_path / "cache"
+    for i in range(toolchain.FAILED_KEPT + 2):
+        entry = write_st(f"PROGRAM Main\n  VAR i : INT; END_VAR\n  i := {i};\nEND_PROGRAM\n", tmp_path / f"p{i}")
+        with pytest.raises(CompileError) as info:
+            build(entry, backend="builtin", cache_dir=cache)
+        diags = info.value.diagnostics
+        first = DIAGNOSTIC.match(diags[0])
+        assert first and "undeclared_thing" in diags[0], diags
+        kept = Path(first["file"])
+        assert kept.is_file() and kept.parent.parent.name.startswith("failed-") and kept.parent.parent.parent == cache
+        assert any(d.startswith("note: the C compiler rejected the C that builtin generated from ")
+                   and str(entry) in d and str(kept.parent) in d for d in diags), diags
+        assert not list(cache.glob("staging-*"))
+    assert len(list(cache.glob("failed-*"))) == toolchain.FAILED_KEPT
+
+
+def test_cache_folder_outside_a_library_tree(tmp_path, monkeypatch):
+    """build/cache under a library tree (`make clean` removes it); the user's cache folder for a file built
+    from a folder that holds no library, never a build/ folder wherever the command happens to run."""
+    from linmot_st.toolchain.cache import default_dir
+    monkeypatch.delenv("LINMOT_ST_CACHE", raising=False)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    monkeypatch.chdir(tmp_path)
+    res = build(write_st("PROGRAM Main\n  VAR i : INT; END_VAR\n  i := 1;\nEND_PROGRAM\n", tmp_path / "loose"),
+                backend="builtin")
+    assert res.library.is_relative_to(tmp_path / "xdg" / "linmot-st")
+    assert not (tmp_path / "build").exists()
+    monkeypatch.delenv("XDG_CACHE_HOME")
+    assert default_dir(tmp_path, in_tree=False) == Path.home() / ".cache" / "linmot-st"
+    tree = make_tree(tmp_path / "tree")
+    assert build(tree, backend="builtin").library.is_relative_to(tmp_path / "tree" / "build" / "cache")
+    monkeypatch.setenv("LINMOT_ST_CACHE", str(tmp_path / "mine"))
+    assert default_dir(tmp_path, in_tree=False) == tmp_path / "mine"
