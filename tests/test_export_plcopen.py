@@ -542,7 +542,7 @@ def test_what_plcopen_cannot_hold_is_a_clear_error(tmp_path):
 
 
 def test_struct_initial_values_become_struct_values(tmp_path):
-    """Struct initialisers export as structValue, also those the builtin checker refuses (e.g. array fields)."""
+    """Struct initialisers export as structValue, also those the builtin checker refuses (struct initialisers inside arrays)."""
     entry = tmp_path / "st_lib" / "linmot.st"
     entry.parent.mkdir()
     entry.write_text(textwrap.dedent("""
