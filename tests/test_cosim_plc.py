@@ -8,45 +8,13 @@ from pathlib import Path
 import pytest
 
 from linmot_st.bus import Frame, NodeServer, SimBus, open_bus
+from linmot_st.bus.bench import ECHO_ST
 from linmot_st.bus.nodes import ScriptedNode
 from linmot_st.cosim import CoSim, RealTimeCoSim
 
 REPO = Path(__file__).resolve().parents[1]
 MB = "CONFIG0.RES0.CAN0"
 
-ECHO_ST = """{#include "st_lib/types/can.st"}
-PROGRAM Echo
-  VAR_EXTERNAL
-    CAN0 : T_CanMailbox;
-  END_VAR
-  VAR
-    i : INT;
-    Seen : UDINT;
-  END_VAR
-  i := 0;
-  WHILE i < CAN0.RxCount DO   (* not FOR: MatIEC of 2024 runs FOR i := 1 TO 1 zero times (spec/matiec.md) *)
-    i := i + 1;
-    Seen := Seen + 1;
-    IF CAN0.TxCount < 32 THEN
-      CAN0.TxCount := CAN0.TxCount + 1;
-      CAN0.Tx[CAN0.TxCount] := CAN0.Rx[i];
-      CAN0.Tx[CAN0.TxCount].Id := CAN0.Rx[i].Id + 1;
-    ELSE
-      CAN0.TxLost := CAN0.TxLost + 1;
-    END_IF;
-  END_WHILE;
-END_PROGRAM
-
-CONFIGURATION Config0
-  RESOURCE Res0 ON PLC
-    VAR_GLOBAL
-      CAN0 : T_CanMailbox;
-    END_VAR
-    TASK Main(INTERVAL := T#1ms, PRIORITY := 0);
-    PROGRAM Inst0 WITH Main : Echo;
-  END_RESOURCE
-END_CONFIGURATION
-"""
 
 def _backends():
     from linmot_st import toolchain

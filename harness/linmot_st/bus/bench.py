@@ -119,6 +119,7 @@ def measure_bit_length(n: int = 200_000) -> float:
     return n / (time.perf_counter() - t0)
 
 
+# the echo PLC program (each received frame sent back with Id + 1); tests/test_cosim_plc.py uses it too
 ECHO_ST = """{#include "st_lib/types/can.st"}
 PROGRAM Echo
   VAR_EXTERNAL
@@ -126,13 +127,19 @@ PROGRAM Echo
   END_VAR
   VAR
     i : INT;
+    Seen : UDINT;
   END_VAR
   i := 0;
-  WHILE i < CAN0.RxCount AND CAN0.TxCount < 32 DO
+  WHILE i < CAN0.RxCount DO   (* not FOR: MatIEC of 2024 runs FOR i := 1 TO 1 zero times (spec/matiec.md) *)
     i := i + 1;
-    CAN0.TxCount := CAN0.TxCount + 1;
-    CAN0.Tx[CAN0.TxCount] := CAN0.Rx[i];
-    CAN0.Tx[CAN0.TxCount].Id := CAN0.Rx[i].Id + 1;
+    Seen := Seen + 1;
+    IF CAN0.TxCount < 32 THEN
+      CAN0.TxCount := CAN0.TxCount + 1;
+      CAN0.Tx[CAN0.TxCount] := CAN0.Rx[i];
+      CAN0.Tx[CAN0.TxCount].Id := CAN0.Rx[i].Id + 1;
+    ELSE
+      CAN0.TxLost := CAN0.TxLost + 1;
+    END_IF;
   END_WHILE;
 END_PROGRAM
 
