@@ -112,7 +112,7 @@ def run_command(args: argparse.Namespace) -> int:
     import time
     from pathlib import Path
 
-    from linmot_st.pvl import PvlError, load_pvl
+    from linmot_st.pvl.cli import load_or_report
     from linmot_st.toolchain import CompileError
 
     from linmot_st.pvl.dataset import DatasetError, from_pvl
@@ -123,14 +123,8 @@ def run_command(args: argparse.Namespace) -> int:
     from .verify import verify_run
 
     err = sys.stderr
-    try:
-        pvl = load_pvl(args.file)
-    except PvlError as e:
-        print(e, file=err)
-        print(f"{args.file}: {len(e.diagnostics)} error(s)", file=err)
-        return 1
-    except OSError as e:
-        print(f"{args.file}: {e.strerror or e}", file=err)
+    pvl = load_or_report(args.file, err)
+    if pvl is None:
         return 1
     axes = args.axes if args.axes is not None else (len(args.node_ids) if args.node_ids else 1)
     if args.node_ids and len(args.node_ids) != axes:

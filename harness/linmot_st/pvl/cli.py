@@ -12,6 +12,23 @@ import argparse
 import sys
 
 
+def load_or_report(path: str, stream=None):
+    """The PVL file for a command, or None after printing why not (its file:line errors and their count,
+    or why it could not be read): the one way every command that takes a PVL file reports a bad one."""
+    from .errors import PvlError
+    from .parser import load_pvl
+
+    stream = stream or sys.stderr
+    try:
+        return load_pvl(path)
+    except PvlError as err:
+        print(err, file=stream)
+        print(f"{path}: {len(err.diagnostics)} error(s)", file=stream)
+    except OSError as err:
+        print(f"{path}: {err.strerror or err}", file=stream)
+    return None
+
+
 def _add_show(p: argparse.ArgumentParser) -> None:
     p.add_argument("file", metavar="FILE", help="a .pvl file")
     p.add_argument("-v", "--verbose", action="store_true",
@@ -19,18 +36,10 @@ def _add_show(p: argparse.ArgumentParser) -> None:
 
 
 def _run_show(args: argparse.Namespace) -> int:
-    from .errors import PvlError
-    from .parser import load_pvl
     from .show import summary
 
-    try:
-        pvl = load_pvl(args.file)
-    except PvlError as err:
-        print(err, file=sys.stderr)
-        print(f"{args.file}: {len(err.diagnostics)} error(s)", file=sys.stderr)
-        return 1
-    except OSError as err:
-        print(f"{args.file}: {err.strerror or err}", file=sys.stderr)
+    pvl = load_or_report(args.file)
+    if pvl is None:
         return 1
     sys.stdout.write(summary(pvl, verbose=args.verbose))
     return 0

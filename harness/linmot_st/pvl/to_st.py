@@ -141,17 +141,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from .errors import PvlError
-    from .parser import load_pvl
+    from .cli import load_or_report
 
-    try:
-        pvl = load_pvl(args.file)
-    except PvlError as err:
-        print(err, file=sys.stderr)
-        print(f"{args.file}: {len(err.diagnostics)} error(s)", file=sys.stderr)
-        return 1
-    except OSError as err:
-        print(f"{args.file}: {err.strerror or err}", file=sys.stderr)
+    pvl = load_or_report(args.file)
+    if pvl is None:
         return 1
     try:
         text = to_st(pvl, args.type_name)
