@@ -597,18 +597,26 @@ class CodeGen:
         name.sym = inst
         return self.place(name)
 
+    def nested(self, body: list[A.Node], loop: int | None = None) -> None:
+        """The statements of a block one level deeper. In the body of loop `loop`, EXIT and CONTINUE jump to
+        its labels, and the continue label ends the body."""
+        self.indent += 1
+        if loop is not None:
+            self.loops.append((f"__exit{loop}", f"__cont{loop}"))
+        self.statements(body)
+        if loop is not None:
+            self.loops.pop()
+            self.emit(f"__cont{loop}: ;")
+        self.indent -= 1
+
     def st_If(self, s: A.If) -> None:
         for i, (cond, body) in enumerate(s.branches):
             kw = "if" if i == 0 else "} else if"
             self.emit(f"{kw} ({self.cond(cond)}) {{")
-            self.indent += 1
-            self.statements(body)
-            self.indent -= 1
+            self.nested(body)
         if s.else_body is not None:
             self.emit("} else {")
-            self.indent += 1
-            self.statements(s.else_body)
-            self.indent -= 1
+            self.nested(s.else_body)
         self.emit("}")
 
     def cond(self, e: A.Node) -> str:
@@ -644,14 +652,10 @@ class CodeGen:
                     for lo, hi in rngs if not (unsigned64 and hi < 0)) or "0"
                 self.emit(f"{'if' if first else '} else if'} ({conds}) {{")
                 first = False
-                self.indent += 1
-                self.statements(body)
-                self.indent -= 1
+                self.nested(body)
             if s.else_body is not None:
                 self.emit("} else {")
-                self.indent += 1
-                self.statements(s.else_body)
-                self.indent -= 1
+                self.nested(s.else_body)
             self.emit("} }")
             return
         self.emit(f"switch ({sel_c}) {{")
@@ -731,24 +735,14 @@ class CodeGen:
     def st_While(self, s: A.While) -> None:
         n = self.new_label()
         self.emit(f"while ({self.cond(s.cond)}) {{")
-        self.indent += 1
-        self.loops.append((f"__exit{n}", f"__cont{n}"))
-        self.statements(s.body)
-        self.loops.pop()
-        self.emit(f"__cont{n}: ;")
-        self.indent -= 1
+        self.nested(s.body, loop=n)
         self.emit("}")
         self.emit(f"__exit{n}: ;")
 
     def st_Repeat(self, s: A.Repeat) -> None:
         n = self.new_label()
         self.emit("do {")
-        self.indent += 1
-        self.loops.append((f"__exit{n}", f"__cont{n}"))
-        self.statements(s.body)
-        self.loops.pop()
-        self.emit(f"__cont{n}: ;")
-        self.indent -= 1
+        self.nested(s.body, loop=n)
         self.emit(f"}} while (!({self.cond(s.cond)}));")
         self.emit(f"__exit{n}: ;")
 
