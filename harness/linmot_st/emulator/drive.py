@@ -164,6 +164,13 @@ class E1100Drive:
             self.pdo.on_timer(t_ns)
         return self._take(t_ns)
 
+    def inject_error(self, code: int, at_ns: int) -> None:
+        """Test hook: the MC detects error `code` at at_ns (e.g. a fatal 000Dh over current)."""
+        def fire(t: int) -> None:
+            self.mc.inject_error(code, t)
+            self.pdo.publish(t)
+        self._at(at_ns, fire)
+
     def next_timer_ns(self) -> int | None:
         while self._events and not self._live(self._events[0]):
             heapq.heappop(self._events)

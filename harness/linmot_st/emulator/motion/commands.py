@@ -111,8 +111,10 @@ def decode(header: int, params: bytes) -> tuple[CommandDef | None, dict]:
 
 
 def encode(cid: int, count: int = 0, **values) -> bytes:
-    """Header and parameters of a command, little endian (tests, tools)."""
-    c = COMMANDS[cid]
-    header = (cid << 4) | (count & 0xF)
-    body = struct.pack("<" + "".join(code for _, code in c.fields), *(values[n] for n, _ in c.fields))
-    return struct.pack("<H", header) + body
+    """Header and parameters of a command, little endian (tests, tools). An ID the model does not know gets
+    its header alone (to provoke 0081h)."""
+    header = struct.pack("<H", (cid << 4 | count & 0xF) & 0xFFFF)
+    c = COMMANDS.get(cid)
+    if c is None:
+        return header
+    return header + struct.pack("<" + "".join(code for _, code in c.fields), *(values[n] for n, _ in c.fields))

@@ -640,7 +640,8 @@ class MotionControl:
                 self._fail(W.ERR_MAX_POS_OVERSHOT, t)
 
     def _update_in_target(self, t: int) -> None:
-        if not (self.running and self.controlled and self.gen.done(t)
+        if not (self.running and self.controlled and self.state >= W.OPERATION_ENABLED
+                and self.state != W.ERROR_QUICK_STOP and self.gen.done(t)
                 and abs(self.gen.target - self.axis.position) <= self.s.in_target_window_pu):
             self._in_window_since = None
             self.in_target = False

@@ -68,6 +68,9 @@ class ProcessData:
         self.drive = drive
         self.tx = [_Tx(n) for n in range(3)]
         self.rx_cob: list[int | None] = [None, None, None]
+        self.rx1_mode = self.rx3_mode = 0
+        self.rx_on_sync = self.slave_used = False
+        self.sync_cob = 0x080
         self.operational = False
         self.reset_image()
 
