@@ -219,10 +219,10 @@ def test_following_error_during_a_move_then_reset_and_move_again():
     d = link.drive
     link.command(C.VAI16_GO_TO_POS, target=1000, vmax=500, acc=50, dec=50)
     link.advance(100 * MS)
-    d.mc.axis.block()
+    d.mc.block(True, link.t)
     assert link.wait(lambda: d.mc.state == 4, 2000 * MS)
     assert d.mc.error_code == 0x000B
-    d.mc.axis.block(False)
+    d.mc.block(False, link.t)
     link.cw(0x00BF)
     link.cw(0x003E, MS)
     link.cw(0x003F, MS)
@@ -236,9 +236,8 @@ def test_following_error_during_a_move_then_reset_and_move_again():
 def test_standing_lag_error():
     link = homed_link({0x1393: 5000})                                 # 0.5 mm standing error level
     d = link.drive
-    link.drive.mc.axis.block()
-    d.mc.axis.push(8000)                                              # pushed 0.8 mm away and held there
-    link.drive.mc._wake(link.t)
+    d.mc.block(True, link.t)
+    d.mc.push(8000, link.t)                                           # pushed 0.8 mm away and held there
     assert link.wait(lambda: d.mc.state == 4, 100 * MS)
     assert d.mc.error_code == 0x000C
 

@@ -241,7 +241,7 @@ def test_error_during_motion_quick_stop_14_then_4():
     d = link.drive
     link.command(0x090, target=1000, vmax=1000, acc=100, dec=100)
     link.advance(60 * MS)
-    d.mc.axis.block()                                                 # an obstacle: the lag grows
+    d.mc.block(True, link.t)                                          # an obstacle: the lag grows
     assert link.wait(lambda: d.mc.state == 14, 500 * MS)
     assert d.mc.error_code == 0x000B and d.mc.status_word & ERROR
     assert link.wait(lambda: d.mc.state == 4, 2000 * MS)

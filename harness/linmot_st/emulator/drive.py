@@ -140,11 +140,14 @@ class E1100Drive:
             return []
         cid, data = frame.can_id, frame.data
         if cid == 0x000:
+            self.mc.sync(t_ns)
             self._nmt_command(data, t_ns)
         elif cid == 0x600 + self.node_id:
             if self.nmt_state != STOPPED and not self._sdo_busy:
+                self.mc.sync(t_ns)                       # the MC's variables as of now; a write may follow
                 self._sdo_request(bytes(data), t_ns)
-        elif self.nmt_state == OPERATIONAL:
+        elif self.nmt_state == OPERATIONAL and self.pdo.handles(cid):
+            self.mc.observe(t_ns)                        # the MC's own inputs forget what it computed ahead
             self.pdo.on_frame(cid, bytes(data), t_ns)
         return self._take(t_ns)
 
@@ -161,8 +164,13 @@ class E1100Drive:
             self.pdo.publish(t_ns)
         pdo_t = self.pdo.next_timer_ns()
         if pdo_t is not None and pdo_t <= t_ns:
+            self.mc.observe(t_ns)
             self.pdo.on_timer(t_ns)
         return self._take(t_ns)
+
+    def observe(self, t_ns: int) -> None:
+        """Bring the inspectable state (drive.mc) to t_ns: the bus and DirectLink call it after running."""
+        self.mc.observe(t_ns)
 
     def inject_error(self, code: int, at_ns: int) -> None:
         """Test hook: the MC detects error `code` at at_ns (e.g. a fatal 000Dh over current)."""
@@ -175,7 +183,7 @@ class E1100Drive:
         while self._events and not self._live(self._events[0]):
             heapq.heappop(self._events)
         t = self._events[0].t if self._events else None
-        for other in (self.mc.next_timer_ns(), self.pdo.next_timer_ns()):
+        for other in (self.mc.next_timer_ns(self.pdo.cycle_sensitive), self.pdo.next_timer_ns()):
             if other is not None and (t is None or other < t):
                 t = other
         return t
@@ -215,6 +223,7 @@ class E1100Drive:
             raise RuntimeError("drive is already attached to a bus")
         server = NodeServer(self, bus, on_start=self.power_on, name=f"E1100 node {self.node_id}")
         self.lock = server.lock
+        self.mc.lookahead = False          # in real time every cycle runs when due: state is current to inspect
         self._server = server.start()
 
     def detach(self) -> None:
@@ -225,6 +234,7 @@ class E1100Drive:
                 server.stop()
             finally:
                 self.lock = threading.RLock()
+                self.mc.lookahead = True
 
     # ------------------------------------------------------------------ internals: scheduling
     def _live(self, ev: _Event) -> bool:

@@ -63,6 +63,7 @@ class Parameter:
 class ParameterStore:
     def __init__(self, definitions: list[ParamDef]):
         self._p: dict[int, Parameter] = {d.upid: Parameter(d, d.default, d.default) for d in definitions}
+        self.by_upid = self._p                  # read-only view for the MC's per-cycle parameter reads
         self._order = sorted(self._p)
         self._strings = {d.upid: d for d in definitions if d.kind == "string"}
         self.live: Callable[[int], int | None] | None = None   # the drive's variables now (the MC's provider)

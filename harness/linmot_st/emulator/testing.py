@@ -56,6 +56,9 @@ class DirectLink:
         while self._step(t_ns):
             pass
         self.t = max(self.t, t_ns)
+        observe = getattr(self.node, "observe", None)
+        if observe is not None:
+            observe(self.t)                     # a drive that computed ahead: its state as of now
         return self.received[start:]
 
     def advance(self, dt_ns: int) -> list[tuple[int, Frame]]:

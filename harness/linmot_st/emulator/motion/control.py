@@ -65,7 +65,7 @@ _NEEDS_HOMING = {
 # commands executed in any state of the running MC, not only in Operation Enabled
 _ANY_STATE = {C.NOP, C.WRITE_CONTROL_WORD, C.WRITE_LIVE_PARAMETER}
 
-_CONTROLLED_STATES = {W.OPERATION_ENABLED, W.ABORTING, W.FREEZING, W.ERROR_QUICK_STOP} | set(W.SPECIAL_STATES)
+_PLAIN_STATES = frozenset({W.READY_TO_OPERATE, W.OPERATION_ENABLED, W.ABORTING, W.FREEZING})
 
 
 def _s16(v: float) -> int:
@@ -78,6 +78,8 @@ class MotionControl:
         self.s = settings
         self.hw_test_ns = hw_test_ns
         self.params, self.curves, self.ct = params, curves, ct
+        self._pars = params.by_upid
+        self.words = (0, 0, 0, 0)          # status word, state var, logged error, warn word: set by _record
         self._log_error = log_error
         self.axis = Axis(settings)
         self.trajectory = Trajectory()
@@ -113,6 +115,7 @@ class MotionControl:
         self._hw_test_end: int | None = None
         self._special_phase = 0
         self._next_tick: int | None = None
+        self._ahead: list[tuple] = []
         self._last_tick = 0
         self._prev_vd = 0.0
         self._now = getattr(self, "_now", 0)
@@ -120,12 +123,14 @@ class MotionControl:
 
     # ------------------------------------------------------------------ parameters
     def par(self, upid: int, default: int = 0) -> int:
-        p = self.params
-        return p[upid].ram if upid in p else default
+        """The RAM value of a parameter (default where the drive has no such UPID)."""
+        p = self._pars.get(upid)
+        return default if p is None else p.ram
 
     # ------------------------------------------------------------------ MC software start / stop
     def start(self, t: int, motor_defined: bool) -> int | None:
         """MC start (boot, 36h): returns an error code to log when the configuration is unusable."""
+        self.sync(t)
         self._now = t
         self.running = True
         self._reset_state()
@@ -144,10 +149,12 @@ class MotionControl:
     def stop(self, t: int | None = None) -> None:
         """MC stopped (35h, reset, power off): the power stage is off, the slider coasts."""
         t = self._now if t is None else t
+        self.sync(t)
         self.running = False
         self._reset_state()
         if self.axis.velocity:
             self._wake(t)
+        self._record(t)
 
     # ------------------------------------------------------------------ inputs
     def _effective_cw(self) -> int:
@@ -157,8 +164,11 @@ class MotionControl:
         return cw & 0xFFFF
 
     def set_control_word(self, interface_cw: int, t: int) -> None:
-        """A new control word from the interface (RxPDO1, 001xh); bits forced by parameter win ([MC] 3.21)."""
-        self._catch_up(t)
+        """A new control word from the interface (RxPDO1, 001xh); bits forced by parameter win ([MC] 3.21).
+        The same word again changes nothing (the state machine rests where the word left it)."""
+        if interface_cw & 0xFFFF == self.interface_cw and self._effective_cw() == self.control_word:
+            return
+        self.sync(t)
         self.interface_cw = interface_cw & 0xFFFF
         old, self.control_word = self.control_word, self._effective_cw()
         if self.running:
@@ -171,7 +181,7 @@ class MotionControl:
         count = header & 0x000F
         if count == self.last_count:
             return
-        self._catch_up(t)
+        self.sync(t)
         self.last_count = count
         if not self.running:
             return
@@ -530,16 +540,36 @@ class MotionControl:
             self._power_off(t, W.ERROR)
         return False
 
+    def block(self, on: bool, t: int) -> None:
+        """Test hook: an obstacle holds the slider where it is from t (False: released)."""
+        self.sync(t)
+        self.axis.block(on)
+        self._wake(t)
+        self._record(t)
+
+    def push(self, delta_pu: float, t: int) -> None:
+        """Test hook: a disturbance moves the slider by delta_pu at t."""
+        self.sync(t)
+        self.axis.push(delta_pu)
+        self._wake(t)
+        self._record(t)
+
     def inject_error(self, code: int, t: int) -> None:
         """Test hook: the drive detects an error now (e.g. a fatal 000Dh over current)."""
-        self._catch_up(t)
+        self.sync(t)
         if self.running and self.state not in (W.ERROR, W.SETUP_ERROR):
             self._fail(code, t)
             self._record(t)
 
     # ------------------------------------------------------------------ the cycle
-    def next_timer_ns(self) -> int | None:
+    def next_timer_ns(self, cycle_sensitive: bool = True) -> int | None:
+        """The next cycle, or, where no output needs every cycle (cycle_sensitive False), the first cycle
+        after the quiet ones computed ahead."""
         t = self._next_tick
+        if t is not None and not cycle_sensitive:
+            ahead = self.compute_ahead()
+            if ahead is not None:
+                t = ahead
         if self._hw_test_end is not None and (t is None or self._hw_test_end < t):
             t = self._hw_test_end
         return t
@@ -564,9 +594,118 @@ class MotionControl:
             self._prev_vd = self.gen.at(self._last_tick)[1] if self.controlled else 0.0
 
     def _catch_up(self, t: int) -> None:
+        """Run the cycles up to t: the quiet ones computed ahead or in a tight loop, the others one by one."""
         while self._next_tick is not None and self._next_tick <= t:
+            if self._ahead:
+                self._apply_ahead(t)
+                continue
+            if self._plain() and self._quiet_run(t, None):
+                continue
             self._cycle(self._next_tick)
         self._now = max(self._now, t)
+
+    def observe(self, t: int) -> None:
+        """Bring the inspectable state to time t (cycles computed ahead are taken over; nothing changes what
+        happens later)."""
+        self._catch_up(t)
+
+    def sync(self, t: int) -> None:
+        """An input is about to arrive at t (a frame for this drive, a test hook): run to t, forget what was
+        computed ahead of it."""
+        self._catch_up(t)
+        if self._ahead:
+            self._ahead = []
+            self._horizon = 8           # disturbed: look less far ahead next time
+
+    # ---- quiet cycles: plain motion, nothing for the state machine to do ----------------------------
+    # A cycle is quiet when the generic _cycle would only move the setpoint and the axis and find every
+    # output word (status, state var, warn, error) unchanged. Such cycles run in a tight loop, and, where
+    # no event-driven TxPDO depends on them (pdo.cycle_sensitive), ahead of the bus: the drive then asks
+    # to be woken only at the first cycle that is not quiet. tests/test_motion_equivalence.py checks that
+    # frames and trajectory are the same as with every cycle run one by one.
+    lookahead = True
+    AHEAD_MAX = 2000                # cycles computed ahead at most; the horizon doubles while undisturbed
+    _horizon = 8
+
+    def _plain(self) -> bool:
+        return (self.running and self.controlled and self.state in _PLAIN_STATES and self.after_stop is None
+                and not self.ct_runner.running and not self.axis.blocked and not self.par(P_RANGE1_UPID)
+                and self._next_tick is not None and self.s.quiet_cycles)
+
+    def _quiet_run(self, t_limit: int, entries: list | None = None) -> bool:
+        """Commit quiet cycles from the next tick up to t_limit; True when any ran. It stops before the first
+        cycle that is not quiet: the generic cycle runs that one. `entries` collects each cycle's state."""
+        gen, axis, par = self.gen, self.axis, self.par
+        cyc, t = self.s.cycle_ns, self._next_tick
+        lag_warn, lag_err = par(P_LAG_ALWAYS_WARN, 1 << 31), par(P_LAG_ALWAYS_ERROR, 1 << 31)
+        st_warn, st_err = par(P_LAG_STANDING_WARN, 1 << 31), par(P_LAG_STANDING_ERROR, 1 << 31)
+        limits = self.homed and par(P_LIMITS_ENABLE)
+        lim_neg, lim_pos = par(P_LIMIT_NEGATIVE, -(1 << 31)), par(P_LIMIT_POSITIVE, 1 << 31)
+        target_ok = self.state >= W.OPERATION_ENABLED
+        window, hold = self.s.in_target_window_pu, self.s.in_target_hold_ns
+        was_active = not gen.done(self._now)
+        warn_bits, in_target, since, prev_vd = self.warn_bits, self.in_target, self._in_window_since, self._prev_vd
+        sw, sv = self.words[0], self.words[1]
+        record = self.trajectory.add if self.s.record_trajectory else None
+        ran = 0
+        while t <= t_limit:
+            saved = (axis.physical, axis.velocity, axis.acceleration)
+            p, v, _ = gen.at(t)
+            axis.follow(p, prev_vd, v)
+            pos = axis.position
+            err = abs(p - pos)
+            active = not gen.done(t)
+            warn = (W.WARN_POS_LAG_ALWAYS if err > lag_warn else 0) | \
+                   (W.WARN_POS_LAG_STANDING if not active and err > st_warn else 0)
+            in_window = target_ok and not active and abs(gen.target - pos) <= window
+            new_since = (t if since is None else since) if in_window else None
+            now_in_target = in_window and t - new_since >= hold
+            if (active != was_active or warn != warn_bits or err > lag_err or (not active and err > st_err)
+                    or (limits and (pos < lim_neg or pos > lim_pos)) or now_in_target != in_target
+                    or (not active and not (new_since is not None and not now_in_target) and axis.at_rest(p))):
+                axis.physical, axis.velocity, axis.acceleration = saved
+                break
+            prev_vd, since = v, new_since
+            self.dem_p, self.dem_v, self._last_tick, self._now = p, v, t, t
+            sample = Sample(t, p, pos, v, axis.velocity, sv, sw) if record is not None else None
+            if entries is not None:
+                entries.append((t, axis.physical, axis.velocity, axis.acceleration, v, p, v, since, sample))
+            elif sample is not None:
+                record(sample)
+            ran += 1
+            t += cyc
+        self._prev_vd, self._in_window_since, self._next_tick = prev_vd, since, t
+        return ran > 0
+
+    def compute_ahead(self) -> int | None:
+        """With quiet cycles ahead, the first cycle the generic path has to run (the drive's next timer)."""
+        if not self._ahead and self.lookahead and self._plain():
+            axis = self.axis
+            saved = (axis.physical, axis.velocity, axis.acceleration, self._prev_vd, self.dem_p, self.dem_v,
+                     self._last_tick, self._next_tick, self._in_window_since, self._now)
+            entries: list[tuple] = []
+            self._quiet_run(self._next_tick + (self._horizon - 1) * self.s.cycle_ns, entries)
+            self._horizon = min(self._horizon * 2, self.AHEAD_MAX)
+            (axis.physical, axis.velocity, axis.acceleration, self._prev_vd, self.dem_p, self.dem_v,
+             self._last_tick, self._next_tick, self._in_window_since, self._now) = saved
+            self._ahead = entries
+        if self._ahead:
+            return self._ahead[-1][0] + self.s.cycle_ns
+        return None
+
+    def _apply_ahead(self, t: int) -> None:
+        """Take over the cycles computed ahead up to t."""
+        ahead, k = self._ahead, 0
+        add = self.trajectory.add
+        while k < len(ahead) and ahead[k][0] <= t:
+            if ahead[k][8] is not None:
+                add(ahead[k][8])
+            k += 1
+        if k:
+            (tk, self.axis.physical, self.axis.velocity, self.axis.acceleration, self._prev_vd, self.dem_p,
+             self.dem_v, self._in_window_since, _) = ahead[k - 1]
+            self._last_tick, self._next_tick, self._now = tk, tk + self.s.cycle_ns, tk
+        del ahead[:k]
 
     def _cycle(self, t: int) -> None:
         self._now = t
@@ -596,8 +735,8 @@ class MotionControl:
                     self._power_off(t, W.ERROR)
                 elif then == "off3":
                     self._power_off(t, W.SWITCH_ON_DISABLED)
-        self._update_in_target(t)
         # keep cycling while anything can still change
+        self._update_in_target(t)
         busy = (not self.gen.done(t) or self.ct_runner.running or axis.blocked
                 or (self.state in W.SPECIAL_STATES and self.sub != W.SUB_FINISHED)
                 or (self._in_window_since is not None and not self.in_target))
@@ -657,13 +796,27 @@ class MotionControl:
         return self.running and self.controlled and (not self.gen.done(self._now) or self.ct_runner.running)
 
     @property
+    def status_word(self) -> int:
+        return self.words[0]
+
+    @property
+    def state_var(self) -> int:
+        return self.words[1]
+
+    @property
     def warn_word(self) -> int:
+        return self.words[3]
+
+    def outputs(self) -> tuple[int, int, int, int]:
+        """Status word, state var, logged error code, warn word (TxPDO1), as of the last event or cycle."""
+        return self.words
+
+    def _warn_word(self) -> int:
         if not self.running or self.state == W.SETUP_ERROR:
             return 0
         return self.warn_bits | (0 if self.homed else W.WARN_MOTOR_NOT_HOMED)
 
-    @property
-    def status_word(self) -> int:
+    def _status_word(self, warn: int) -> int:
         if not self.running:
             return 0
         cw, s = self.control_word, self.state
@@ -682,7 +835,7 @@ class MotionControl:
             bits |= W.SW_QUICK_STOP_N
         if s == W.NOT_READY_TO_SWITCH_ON:
             bits |= W.SW_SWITCH_ON_LOCKED
-        if self.warn_word:
+        if warn:
             bits |= W.SW_WARNING
         if s in W.SPECIAL_STATES and self.sub != W.SUB_FINISHED:
             bits |= W.SW_SPECIAL_MOTION
@@ -708,8 +861,7 @@ class MotionControl:
             v = self.par(upid, None)
         return v is not None and lo <= v <= hi
 
-    @property
-    def state_var(self) -> int:
+    def _state_var(self) -> int:
         if not self.running:
             return 0
         s = self.state
@@ -729,10 +881,6 @@ class MotionControl:
             low = 0
         return s << 8 | low
 
-    def outputs(self) -> tuple[int, int, int, int]:
-        """Status word, state var, logged error code, warn word (TxPDO1)."""
-        return self.status_word, self.state_var, self.error_code if self.running else 0, self.warn_word
-
     def position_16(self, pu: float) -> int:
         """A position in the 16-bit interface scaling (1B94h, 1B95h; INFERRED: saturated)."""
         return _s16(pu / max(self.par(P_SCALE_POS, 1000), 1))
@@ -740,9 +888,9 @@ class MotionControl:
     def variable(self, upid: int) -> int | None:
         """The value of an MC variable now (SDO reads, TxPDOs by UPID); None: not a variable of the MC."""
         if upid == V_STATUS_WORD:
-            return self.status_word
+            return self.words[0]
         if upid == V_STATE_VAR:
-            return self.state_var
+            return self.words[1]
         if upid == V_ACTUAL_POSITION:
             return int(round(self.axis.position))
         if upid == V_ACTUAL_POSITION_16:
@@ -750,9 +898,9 @@ class MotionControl:
         if upid == V_DEMAND_POSITION_16:
             return self.position_16(self.dem_p)
         if upid == V_WARN_WORD:
-            return self.warn_word
+            return self.words[3]
         if upid == V_LOGGED_ERROR:
-            return self.error_code if self.running else 0
+            return self.words[2]
         if upid == V_CONTROL_WORD:
             return self.control_word
         if upid == V_DEMAND_CURRENT:
@@ -770,11 +918,13 @@ class MotionControl:
         return None
 
     def _record(self, t: int) -> None:
-        """After an event or a cycle: the outputs are up to date, the trajectory has a sample."""
+        """After an event or a cycle: the outputs are brought up to date, the trajectory gets a sample."""
         self._update_in_target(t)
+        warn = self._warn_word()
+        sw, sv = self._status_word(warn), self._state_var()
+        self.words = (sw, sv, self.error_code if self.running else 0, warn)
         if self.s.record_trajectory:
-            self.trajectory.add(Sample(t, self.dem_p, self.axis.position, self.dem_v, self.axis.velocity,
-                                       self.state_var, self.status_word))
+            self.trajectory.add(Sample(t, self.dem_p, self.axis.position, self.dem_v, self.axis.velocity, sv, sw))
 
 
 _SPECIAL_BIT = {W.HOMING: W.CW_HOME, W.CLEARANCE_CHECK: W.CW_CLEARANCE_CHECK,

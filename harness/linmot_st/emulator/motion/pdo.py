@@ -38,17 +38,14 @@ P_DIRECT_PAR_UPIDS = (0x2050, 0x2051)
 ERR_INVALID_TX_MAPPING = 0xD1                   # + n
 ERR_INVALID_TX_UPID = 0xD7                      # + n
 
-TX_DEFAULT = (
-    (V_STATUS_WORD, V_STATE_VAR, V_LOGGED_ERROR, V_WARN_WORD),
-    ("cmd_status", V_ACTUAL_POSITION_16, V_DEMAND_CURRENT, V_DEMAND_POSITION_16),
-    (),
-)
 RX3_LENGTH = {0: 4, 1: 6, 2: 8, 3: 4}
+# the MC words that change only at events, never within quiet cycles (status word, state var, logged error, warn)
+EVENT_WORDS = frozenset({V_STATUS_WORD, V_STATE_VAR, V_LOGGED_ERROR, V_WARN_WORD})
 
 
 class _Tx:
     __slots__ = ("n", "cob", "ttype", "inhibit_ns", "event_ns", "pack", "last", "last_sent", "due", "event_due",
-                 "sync_count")
+                 "sync_count", "cycle_sensitive")
 
     def __init__(self, n: int):
         self.n = n
@@ -61,6 +58,7 @@ class _Tx:
         self.due: int | None = None           # deferred by the inhibit time
         self.event_due: int | None = None
         self.sync_count = 0
+        self.cycle_sensitive = True           # its content may change in any MC cycle (positions...)
 
 
 class ProcessData:
@@ -69,7 +67,7 @@ class ProcessData:
         self.tx = [_Tx(n) for n in range(3)]
         self.rx_cob: list[int | None] = [None, None, None]
         self.rx1_mode = self.rx3_mode = 0
-        self.rx_on_sync = self.slave_used = False
+        self.rx_on_sync = self.slave_used = self.cycle_sensitive = False
         self.sync_cob = 0x080
         self.operational = False
         self.reset_image()
@@ -102,49 +100,58 @@ class ProcessData:
             tx.event_ns = comm.value(0x1800 + n, 5) * 1_000_000
             tx.last = tx.last_sent = tx.due = tx.event_due = None
             tx.sync_count = 0
-            tx.pack = self._mapping(n, t)
+            tx.pack, tx.cycle_sensitive = self._mapping(n, t)
             sync_rx = sync_rx or 1 <= tx.ttype <= 240
         self.rx_on_sync = sync_rx
         self.slave_used = self.rx_cob[2] is not None and self.rx3_mode in (0, 1, 2)
         self.sync_cob = comm.value(0x1005) & 0x7FF
         self._rx_pending = [None, None, None]
         self.operational = True
+        self._update_sensitivity()
         self.publish(t)
 
     def stop(self) -> None:
         self.operational = False
+        self.cycle_sensitive = False
 
-    def _mapping(self, n: int, t: int) -> Callable[[], bytes] | None:
+    def _mapping(self, n: int, t: int) -> tuple[Callable[[], bytes] | None, bool]:
+        """The packer of TxPDO n, and whether its content can change in a quiet MC cycle (positions...)."""
         params = self.drive.params
         mode_upid = P_TX_MODE[n]
         by_upid = mode_upid is None or (mode_upid in params and params[mode_upid].ram == 1)
         if not by_upid:
-            items = [self._default_item(i) for i in TX_DEFAULT[n]]
+            return self._default_packer(n), n != 0      # TxPDO1's words change only at events
         else:
-            items = []
+            items, upids = [], []
             for upid_par in P_TX_UPIDS[n]:
                 upid = params[upid_par].ram if upid_par in params else 0
                 if upid == 0:
                     continue
                 if upid not in params or params[upid].d.kind == "string":
                     self.drive.interface_error(ERR_INVALID_TX_UPID + n, t)
-                    return None
+                    return None, False
                 items.append(self._upid_item(upid))
+                upids.append(upid)
         fmt = "<" + "".join(code for code, _ in items)
         if struct.calcsize(fmt) > 8:
             self.drive.interface_error(ERR_INVALID_TX_MAPPING + n, t)
-            return None
+            return None, False
         if not items:
-            return None
+            return None, False
         getters = [g for _, g in items]
-        return lambda: struct.pack(fmt, *(g() for g in getters))
+        sensitive = not set(upids) <= EVENT_WORDS
+        return (lambda: struct.pack(fmt, *(g() for g in getters))), sensitive
 
-    def _default_item(self, item) -> tuple[str, Callable[[], int]]:
+    def _default_packer(self, n: int) -> Callable[[], bytes] | None:
+        """The manual's default contents ([CO1100] 5.1), packed straight from the MC's outputs (per cycle)."""
         mc = self.drive.mc
-        if item == "cmd_status":
-            return "H", lambda: mc.last_header
-        code = "h" if item in (V_ACTUAL_POSITION_16, V_DEMAND_CURRENT, V_DEMAND_POSITION_16) else "H"
-        return code, lambda: mc.variable(item)
+        pack = struct.Struct("<HHHH").pack
+        if n == 0:                      # status word, state var, logged error code, warn word
+            return lambda: pack(*mc.words)
+        if n == 1:                      # motion command status, actual position 16 bit, current, demand pos 16 bit
+            return lambda: pack(mc.last_header, mc.variable(V_ACTUAL_POSITION_16) & 0xFFFF,
+                                mc.variable(V_DEMAND_CURRENT) & 0xFFFF, mc.variable(V_DEMAND_POSITION_16) & 0xFFFF)
+        return None                     # TxPDO3: empty unless mapped by UPID
 
     def _upid_item(self, upid: int) -> tuple[str, Callable[[], int]]:
         p = self.drive.params[upid]
@@ -156,6 +163,16 @@ class ProcessData:
             v = mc.variable(upid)
             return p.ram if v is None else v
         return code, get
+
+    def _update_sensitivity(self) -> None:
+        """cycle_sensitive: an event-driven TxPDO's content may change in any MC cycle, so the MC must run
+        cycle by cycle (and may not compute ahead)."""
+        self.cycle_sensitive = self.operational and any(tx.ttype >= 254 and tx.pack is not None
+                                                        and tx.cob is not None and tx.cycle_sensitive
+                                                        for tx in self.tx)
+
+    def handles(self, cid: int) -> bool:
+        return self.operational and (cid == self.sync_cob or cid in self.rx_cob)
 
     # ------------------------------------------------------------------ frames in
     def on_frame(self, cid: int, data: bytes, t: int) -> None:

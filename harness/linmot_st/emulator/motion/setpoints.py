@@ -36,13 +36,16 @@ class VaPlan:
         segs: list[_Seg] = []
         t = _plan(segs, 0.0, float(p0), float(v0), self.target, self.vmax, self.acc, self.dec)
         self._segs = segs
+        self._start = (float(p0), float(v0))
         self.end_s = t
         self.end_ns = origin_ns + math.ceil(t * 1e9)
 
     def at(self, t_ns: int) -> tuple[float, float, float]:
         t = (t_ns - self.origin_ns) * NS
-        if t >= self.end_s:
+        if t >= self.end_s or not self._segs:
             return self.target, 0.0, 0.0
+        if t <= 0:
+            return self._start[0], self._start[1], 0.0
         segs = self._segs
         i = len(segs) - 1
         while i > 0 and segs[i].t > t:
