@@ -419,6 +419,7 @@ class MotionControl:
         if not self.controlled:
             self.controlled = True
             self.gen = Hold(self.axis.position)           # no jump: the demand starts where the slider is
+            self._prev_vd = 0.0
             self._wake(t)
 
     def _power_off(self, t: int, state: int) -> None:
@@ -426,6 +427,7 @@ class MotionControl:
         self.controlled = False
         self.after_stop = None
         self.gen = Hold(self.axis.position)
+        self._prev_vd = 0.0
         self.state, self.sub = state, 0
         self._hw_test_end = None
         if self.axis.velocity:

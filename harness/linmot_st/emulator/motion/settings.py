@@ -23,7 +23,7 @@ class MotionSettings:
     damping: float = 1.0
     acc_feedforward: float = 0.8        # 0..1: share of the demand acceleration fed forward
     settle_pu: float = 0.5              # |error| and |velocity| x 1 ms below this: the axis is at rest
-    coast_decel_pu_s2: float = 2_000_000.0   # power stage off: the slider slows down by friction (0.2 m/s^2)
+    coast_decel_pu_s2: float = 50_000_000.0  # power stage off: friction and back-EMF slow the slider (5 m/s^2)
 
     # the mechanics in the slider's own frame (pu): mechanical stops, and where the slider is at power-on
     stop_negative_pu: int = 0

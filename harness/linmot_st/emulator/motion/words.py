@@ -6,6 +6,8 @@ Only numbers live here; the behaviour is in state_machine.py and the generators.
 
 from __future__ import annotations
 
+from ...errors import DRIVE_ERRORS
+
 # ---- main states (state var high byte) ------------------------------------------------------------------
 NOT_READY_TO_SWITCH_ON = 0
 SWITCH_ON_DISABLED = 1
@@ -95,5 +97,6 @@ ERR_MOTION_CMD_WRONG_STATE = 0x0086
 ERR_CURVE_AMP_SCALE = 0x0089
 ERR_CMD_TAB_ENTRY_NOT_DEFINED = 0x008A
 
-# the codes [MC] marks "Fatal Err" (status word bit 12: no acknowledge, only a reset clears them)
-FATAL_ERRORS = frozenset({0x000A, 0x000D, 0x0021, 0x0022, 0x0045, 0x0064, 0x0065, 0x0067, 0x0068})
+# the codes [MC] marks "Fatal Err" (status word bit 12: no acknowledge, only a reset clears them): the
+# drive's error table (data/e1100_error_texts.csv) says which
+FATAL_ERRORS = frozenset(d.code for d in DRIVE_ERRORS if d.fatal)
