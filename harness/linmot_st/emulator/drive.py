@@ -226,6 +226,10 @@ class E1100Drive:
         self.mc.lookahead = False          # in real time every cycle runs when due: state is current to inspect
         self._server = server.start()
 
+    def clock_now_ns(self) -> int | None:
+        """While attached: the drive's time now (ns since it was attached); None in virtual time."""
+        return self._server.now_ns() if self._server is not None else None
+
     def detach(self) -> None:
         """Stop serving (joins the thread); re-raises an exception the drive raised meanwhile."""
         server, self._server = self._server, None

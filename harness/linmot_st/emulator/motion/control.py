@@ -83,6 +83,7 @@ class MotionControl:
         self._log_error = log_error
         self.axis = Axis(settings)
         self.trajectory = Trajectory()
+        self.executed: list[tuple[int, int, bytes]] = []   # (t_ns, header, parameters) of every command run
         self.ct_runner = CtRunner(self)
         self.running = False
         self.power_on_reset()
@@ -200,6 +201,7 @@ class MotionControl:
     def execute(self, header: int, params: bytes, t: int, from_table: bool = False) -> bool:
         """Run one motion command at t; False when it raised an error."""
         c, f = C.decode(header, params)
+        self.executed.append((t, header, bytes(params[:16])))
         if c is None:
             return self._fail(W.ERR_UNKNOWN_MOTION_CMD, t)
         cid = c.cid
