@@ -474,3 +474,39 @@ def test_both_drives_move_in_parallel():
     b.sim.run_until(lambda: m1["DONE"] and m2["DONE"], max_scans=1000)
     assert abs(b.drives[1].mc.axis.position - 50 * MM) <= 1000
     assert abs(b.drives[2].mc.axis.position - 70 * MM) <= 1000
+
+
+# ---------------------------------------------------------------- SYNC transmission, the library's SYNC producer
+def test_sync_mode_with_the_librarys_sync_producer():
+    b = MotionBench(nodes=1, pdo={"PDOTIMEOUT": 50 * MS})
+    b["SYNC.PERIOD"] = 2 * MS
+    b["SYNC.ENABLE"] = True
+    r = b.fb("SETUP").run(MODE="LM_PDO_SYNC", EVENTTIMERMS=0)
+    assert r.done, r
+    assert [c.ttype for c in b.drive.pdo.tx][:2] == [1, 1] and b.drive.pdo.rx_on_sync
+    b.ready()
+    t0 = b.plc.time_ns
+    assert b.fb("MVA").run(POSITION=20.0, **MOVE).done
+    assert abs(b.drive.mc.axis.position - 20 * MM) <= 1000
+    tx1 = [e.start_ns for e in b.bus.trace if e.frame.can_id == 0x181 and e.start_ns >= t0]
+    syncs = [e.start_ns for e in b.bus.trace if e.frame.can_id == 0x080 and e.start_ns >= t0]
+    assert len(tx1) >= len(syncs) - 2 and 0.9 <= len(syncs) / ((b.plc.time_ns - t0) / (2 * MS)) <= 1.1
+    b.step(100)                                                    # a resting drive keeps sending on SYNC
+    assert b["MO1.VALID"]
+
+
+# ---------------------------------------------------------------- both backends, the same frames
+def frames_of_a_sequence(backend: str) -> list[tuple[int, int, bytes]]:
+    b = MotionBench(nodes=1, backend=backend).ready()
+    assert b.fb("MVA").run(POSITION=12.3, **MOVE).done
+    assert b.fb("MVR").run(DISTANCE=1.23456, VELOCITY=50.0, ACCELERATION=500.0, DECELERATION=400.0).done
+    assert b.fb("HALT").run(DECELERATION=1000.0).done
+    return [(e.start_ns, e.frame.can_id, bytes(e.frame.data)) for e in b.bus.trace]
+
+
+def test_matiec_and_builtin_put_the_same_frames_on_the_bus():
+    from stbench import available_backends
+
+    if len(available_backends()) < 2:
+        pytest.skip(f"needs both backends, found {available_backends()} (MatIEC's iec2c: set MATIEC_HOME)")
+    assert frames_of_a_sequence("matiec") == frames_of_a_sequence("builtin")
