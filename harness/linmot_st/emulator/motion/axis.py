@@ -82,7 +82,14 @@ class Axis:
         u = (1.0 - self._kff) * (vd1 - vd0) / self.h
         e1 = p00 * e + p01 * ed + g0 * u
         ed1 = p10 * e + p11 * ed + g1 * u
-        self._move_to(xd1 - e1 - self.offset, vd1 - ed1)
+        physical = xd1 - e1 - self.offset
+        s = self.s
+        if self.blocked or not s.stop_negative_pu <= physical <= s.stop_positive_pu:
+            self._move_to(physical, vd1 - ed1)
+            return
+        v1 = vd1 - ed1                      # the common case, _move_to inlined (the hottest loop of the model)
+        self.acceleration = (v1 - self.velocity) / self.h
+        self.physical, self.velocity = physical, v1
 
     def coast(self) -> None:
         """Power stage off: friction slows the slider down."""

@@ -889,6 +889,13 @@ class MotionControl:
         """A position in the 16-bit interface scaling (1B94h, 1B95h; INFERRED: saturated)."""
         return _s16(pu / max(self.par(P_SCALE_POS, 1000), 1))
 
+    def txpdo2_values(self) -> tuple[int, int, int]:
+        """Actual position 16 bit, demand current, demand position 16 bit as TxPDO2 carries them (the same
+        values as variable(); one call, as TxPDO2 goes on every SYNC)."""
+        scale = max(self.par(P_SCALE_POS, 1000), 1)
+        current = _s16(self.axis.demand_current_ma()) if self.running and self.controlled else 0
+        return (_s16(self.axis.position / scale) & 0xFFFF, current & 0xFFFF, _s16(self.dem_p / scale) & 0xFFFF)
+
     def variable(self, upid: int) -> int | None:
         """The value of an MC variable now (SDO reads, TxPDOs by UPID); None: not a variable of the MC."""
         if upid == V_STATUS_WORD:

@@ -149,8 +149,7 @@ class ProcessData:
         if n == 0:                      # status word, state var, logged error code, warn word
             return lambda: pack(*mc.words)
         if n == 1:                      # motion command status, actual position 16 bit, current, demand pos 16 bit
-            return lambda: pack(mc.last_header, mc.variable(V_ACTUAL_POSITION_16) & 0xFFFF,
-                                mc.variable(V_DEMAND_CURRENT) & 0xFFFF, mc.variable(V_DEMAND_POSITION_16) & 0xFFFF)
+            return lambda: pack(mc.last_header, *mc.txpdo2_values())
         return None                     # TxPDO3: empty unless mapped by UPID
 
     def _upid_item(self, upid: int) -> tuple[str, Callable[[], int]]:
