@@ -1,0 +1,30 @@
+"""Packaging beyond pyproject.toml: a wheel carries st_lib/ and plc_project/ inside linmot_st/.
+
+The two trees stay at the repository root (where the project's layout and every include path put them);
+build_py copies them into the built package, so an installed linmot-st finds them beside its code
+(linmot_st.resources). An editable install needs no copy: it reads them from the checkout. The sdist gets
+them from MANIFEST.in.
+"""
+
+import shutil
+from pathlib import Path
+
+from setuptools import setup
+from setuptools.command.build_py import build_py
+
+ROOT = Path(__file__).resolve().parent
+TREES = ("st_lib", "plc_project")      # linmot_st.resources.TREES
+
+
+class BuildPyWithLibrary(build_py):
+    def run(self):
+        super().run()
+        if getattr(self, "editable_mode", False):
+            return
+        for tree in TREES:
+            target = Path(self.build_lib) / "linmot_st" / tree
+            shutil.rmtree(target, ignore_errors=True)
+            shutil.copytree(ROOT / tree, target, ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "build"))
+
+
+setup(cmdclass={"build_py": BuildPyWithLibrary})
