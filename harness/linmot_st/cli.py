@@ -18,6 +18,7 @@ SUBCOMMAND_MODULES = [
     "linmot_st.pvl.cli",           # pvl show, pvl to-st
     "linmot_st.commission.cli",    # commission
     "linmot_st.export.cli",        # export st, export plcopen
+    "linmot_st.userproject.cli",   # init
     "linmot_st.bench",             # bench
 ]
 

@@ -16,7 +16,8 @@ from pathlib import Path
 PACKAGE = Path(__file__).resolve().parent
 CHECKOUT = PACKAGE.parents[1]                 # harness/linmot_st -> the repository root
 LIBRARY_MARKER = Path("st_lib") / "linmot.st"
-TREES = ("st_lib", "plc_project")              # what a wheel carries (setup.py)
+TREES = ("st_lib", "plc_project")              # the include path's folders (toolchain.sources)
+PROJECT_TEMPLATE = Path("examples") / "user_project"   # what `linmot-st init` copies; a wheel carries it too
 
 
 class LibraryNotFound(FileNotFoundError):
@@ -31,6 +32,14 @@ def library_tree() -> Path:
             return folder
     raise LibraryNotFound(f"st_lib/linmot.st is neither in {PACKAGE} (an installed linmot-st) nor in {CHECKOUT} "
                           "(a source checkout): reinstall linmot-st")
+
+
+def project_template() -> Path:
+    """The folder `linmot-st init` copies: examples/user_project of the library tree."""
+    folder = library_tree() / PROJECT_TEMPLATE
+    if not (folder / "plc.st").is_file():
+        raise LibraryNotFound(f"{folder}: the project template is missing: reinstall linmot-st")
+    return folder
 
 
 def installed() -> bool:
