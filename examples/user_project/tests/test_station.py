@@ -67,3 +67,16 @@ def test_a_forced_node_id_talks_to_no_drive(rig):
     rig.step(2000)
     assert rig[f"{STATION}.STATE"] == "ST_BOOT"
     assert not any(e.frame.can_id == 0x605 for e in rig.frames(0))        # it never got to send a request
+
+
+def test_the_station_on_a_python_can_bus_in_real_time(pycan_rig):
+    """The same PLC against a drive served on a python-can `virtual` bus, scan by scan in real time (fast
+    drive timings: the boot takes 20 ms)."""
+    pycan_rig.step_until(f"{STATION}.STATE = ST_COMMISSION", scans=2000)
+    assert pycan_rig[f"{STATION}.CH.NODEID"] == 1
+
+
+@pytest.mark.needs_vcan("vcan0")
+def test_the_station_on_vcan0(pycan_rig):
+    """On a SocketCAN interface (skipped where vcan0 does not exist, as on most CI runners)."""
+    pycan_rig.step_until(f"{STATION}.STATE = ST_COMMISSION", scans=2000)

@@ -217,8 +217,11 @@ class StItem(pytest.Item):
         return f"{_rel(path or self.path, self.project.root)}:{line}"
 
     def repr_failure(self, excinfo, style=None):
+        from linmot_st.toolchain import CompileError
         if isinstance(excinfo.value, StTestFailed):
             return str(excinfo.value)
+        if isinstance(excinfo.value, CompileError):      # the compiler's file:line:col diagnostics say it all
+            return f"{self.path.name} does not build:\n{excinfo.value}"
         return super().repr_failure(excinfo, style)
 
     def reportinfo(self):
