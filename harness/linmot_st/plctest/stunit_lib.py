@@ -67,6 +67,9 @@ HEADER = f"""(* stunit: assertions for tests written in ST, run by the linmot-st
    A failed assertion fails the test at the end of the scan; the first failure is the one reported. *)
 TYPE
   T_StBytes : ARRAY[1..{BYTES_MAX}] OF BYTE;
+END_TYPE
+
+TYPE
   T_StUnit : STRUCT
     Asserts : UDINT;              (* assertions evaluated *)
     Failures : UDINT;             (* of them failed *)
