@@ -62,13 +62,13 @@ def test_frames_of_the_canopen_manual_example():
     b.power()
     t0 = b.plc.time_ns
     b.home()
-    cws = b.frames(0x201, t0)
+    cws = b.payloads(0x201, t0)
     assert cws[:2] == [bytes.fromhex("3F08"), bytes.fromhex("3F00")]        # 083Fh, then 003Fh
     t0 = b.plc.time_ns
     r = b.fb("MVA").run(POSITION=50.0, **MOVE)
     assert r.done, r
-    assert b.frames(0x301, t0) == [bytes.fromhex("0109F401E8036400")]
-    assert b.frames(0x401, t0) == [bytes.fromhex("01096400")]
+    assert b.payloads(0x301, t0) == [bytes.fromhex("0109F401E8036400")]
+    assert b.payloads(0x401, t0) == [bytes.fromhex("01096400")]
     assert abs(b.drive.mc.axis.position - 50 * MM) <= 1000                 # in the target window
     # Done came after the drive's motion: no earlier than the 141 ms triangle
     assert r.scans >= 141
@@ -156,7 +156,7 @@ def test_home_on_the_mechanical_stop():
     b.sim.run_until(lambda: h["DONE"] or h["ERROR"], max_scans=10_000)
     assert h["DONE"] and b.drive.mc.homed and state(b) == 8
     assert b["RSTAT.HOMED"] and abs(b["RP.POSITION"] - 10.0) <= 0.1       # at the initial position
-    assert b.frames(0x201, t0)[0] == bytes.fromhex("3F08")
+    assert b.payloads(0x201, t0)[0] == bytes.fromhex("3F08")
 
 
 def test_home_aborted_by_a_move_reports_command_aborted():
@@ -188,14 +188,14 @@ def test_absolute_and_relative_moves_follow_the_drive(b):
     assert active[-1].t_ns <= b.plc.time_ns                                   # Done after the drive finished
     r = b.fb("MVR").run(DISTANCE=-25.5, **MOVE)
     assert r.done and abs(b.drive.mc.dem_p - 54.5 * MM) < 1
-    assert struct.unpack_from("<H", b.frames(0x301)[-1])[0] >> 4 == 0x091     # VAI 16 bit increment
+    assert struct.unpack_from("<H", b.payloads(0x301)[-1])[0] >> 4 == 0x091     # VAI 16 bit increment
 
 
 def test_a_move_that_needs_32_bit_values_goes_as_predefined_vai(b):
     t0 = b.plc.time_ns
     r = b.fb("MVA").run(POSITION=123.4567, VELOCITY=333.3, ACCELERATION=7777.0, DECELERATION=6666.0)
     assert r.done, r
-    heads = [struct.unpack_from("<H", f)[0] >> 4 for f in b.frames(0x301, t0)]
+    heads = [struct.unpack_from("<H", f)[0] >> 4 for f in b.payloads(0x301, t0)]
     assert heads == [0x002, 0x002, 0x002, 0x020]                          # vmax, acc, dec, then 020xh
     d = b.drive
     assert (d.params[0x14A0].ram, d.params[0x14A1].ram, d.params[0x14A2].ram) == (333300, 777700, 666600)
@@ -206,7 +206,7 @@ def test_forced_16_bit_command_refuses_a_position_it_cannot_carry(b):
     t0 = b.plc.time_ns
     r = b.fb("MVA").run(POSITION=12.34, **MOVE, COMMAND="LM_VAI_16BIT")     # 0.1 mm units: 123.4
     assert r.error and r.error_id == E["PositionRange"] and r.scans == 1
-    assert b.frames(0x301, t0) == []
+    assert b.payloads(0x301, t0) == []
 
 
 def test_a_newer_move_aborts_the_running_one(b):
@@ -300,7 +300,7 @@ def test_invalid_inputs_end_in_error_before_any_frame(b, fb, inputs, name):
     t0 = b.plc.time_ns
     r = b.fb(fb).run(**inputs)
     assert r.error and r.error_id == E[name] and r.scans == 1
-    assert b.frames(0x301, t0) == [] and b.frames(0x401, t0) == []
+    assert b.payloads(0x301, t0) == [] and b.payloads(0x401, t0) == []
 
 
 def test_moves_refused_when_not_enabled_or_not_homed():
@@ -312,7 +312,7 @@ def test_moves_refused_when_not_enabled_or_not_homed():
     assert r.error and r.error_id == E["AxisNotHomed"]
     r = b.fb("CURVE").run(CURVEID=1)
     assert r.error and r.error_id == E["AxisNotHomed"]
-    assert b.frames(0x301) == []
+    assert b.payloads(0x301) == []
 
 
 def test_flash_save_refused_while_enabled_and_motion_refused_while_mc_stopped():
@@ -360,7 +360,7 @@ def test_run_curve_each_variant(bc, mode, inputs, end_mm, duration_s):
     active = [s for s in d.mc.trajectory.between(t0) if s.status_word & 0x2000]
     assert abs((active[-1].t_ns - active[0].t_ns) / 1e9 - duration_s) <= 0.002
     assert d.mc.dem_p == pytest.approx(end_mm * MM, abs=1)
-    head = struct.unpack_from("<H", bc.frames(0x301, t0)[0])[0] >> 4
+    head = struct.unpack_from("<H", bc.payloads(0x301, t0)[0])[0] >> 4
     assert head == {"LM_CURVE_DEFAULT": 0x040, "LM_CURVE_FROM_ACTUAL": 0x041, "LM_CURVE_TO_POSITION": 0x042,
                     "LM_CURVE_TO_POSITION_TIME": 0x043, "LM_CURVE_SCALED": 0x044, "LM_CURVE_TIMED": 0x045}[mode]
 
@@ -422,7 +422,7 @@ def test_a_lost_rxpdo_is_resent_until_the_echo(b):
     t0 = b.plc.time_ns
     r = b.fb("MVA").run(POSITION=40.0, **MOVE)
     assert r.done and abs(b.drive.mc.axis.position - 40 * MM) <= 1000
-    assert len(b.frames(0x301, t0)) == 1 and b["MO1.RESENDS"] == 1         # the lost one never reached the bus
+    assert len(b.payloads(0x301, t0)) == 1 and b["MO1.RESENDS"] == 1         # the lost one never reached the bus
 
 
 def test_a_command_the_drive_never_takes_times_out(b):

@@ -19,6 +19,7 @@ SUBCOMMAND_MODULES = [
     "linmot_st.commission.cli",    # commission
     "linmot_st.motion.cli",        # motion
     "linmot_st.export.cli",        # export st, export plcopen
+    "linmot_st.userproject.cli",   # init
     "linmot_st.bench",             # bench
 ]
 

@@ -57,6 +57,6 @@ class MotionBench(Bench):
         self.home()
         return self
 
-    def frames(self, can_id: int, since_ns: int = 0) -> list[bytes]:
+    def payloads(self, can_id: int, since_ns: int = 0) -> list[bytes]:
         return [bytes(e.frame.data) for e in self.bus.trace
                 if e.frame.can_id == can_id and e.start_ns >= since_ns and e.status != "error"]

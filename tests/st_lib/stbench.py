@@ -1,5 +1,6 @@
 """Test helpers for the ST library: the testbench PLC (tests/st_lib/testbench.st) on a simulated bus
-with emulated E1100 drives, and a handle per FB instance that drives its PLCopen inputs.
+with emulated E1100 drives, and a handle per FB instance that drives its PLCopen inputs. Both are the
+pytest plugin's (linmot_st.plctest.rig: Rig, FbHandle), bound to the testbench.
 
     b = Bench(nodes=1)                 # drives 1..n booted, channels enabled and ready
     r = b.fb("RD").run(UPID=0x1194)    # Execute, step until Done/Error, Execute off
@@ -14,11 +15,12 @@ from __future__ import annotations
 
 import os
 import struct
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import pytest
+
+from linmot_st.plctest.rig import FbHandle, FbResult, Rig
 
 REPO = Path(__file__).resolve().parents[2]
 TESTBENCH = REPO / "tests" / "st_lib" / "testbench.st"
@@ -74,106 +76,44 @@ def bench_build(backend: str = "auto", task_ms: int = 1, source: Path = TESTBENC
     return _builds[key]
 
 
-@dataclass
-class Result:
-    done: bool
-    busy: bool
-    error: bool
-    error_id: int
-    scans: int                      # scans from the Execute scan to the one that showed Done/Error, inclusive
-    outputs: dict = field(default_factory=dict)
-    aborted: bool = False
-
-    def __getitem__(self, key: str) -> Any:
-        return self.outputs[key.upper()]
-
-    @property
-    def error_name(self) -> str:
-        from linmot_st.errors import name_of
-        return name_of(self.error_id)
+Result = FbResult                   # the PLCopen outcome of an FB run (linmot_st.plctest.rig)
 
 
-class Fb:
-    """One FB instance of the testbench program."""
+class Fb(FbHandle):
+    """One FB instance of the testbench program: the plugin's FB handle, named within BENCH."""
 
     def __init__(self, bench: "Bench", name: str):
+        super().__init__(bench, f"{bench.prog}.{name}")
         self.bench = bench
         self.name = name.upper()
-        self.path = f"{bench.prog}.{self.name}"
-
-    def __getitem__(self, member: str) -> Any:
-        return self.bench.plc[f"{self.path}.{member}"]
-
-    def __setitem__(self, member: str, value: Any) -> None:
-        self.bench.plc[f"{self.path}.{member}"] = value
-
-    def set(self, **inputs: Any) -> None:
-        for k, v in inputs.items():
-            self[k] = v
 
     def flags(self) -> tuple[bool, bool, bool]:
         return self["DONE"], self["BUSY"], self["ERROR"]
 
-    def start(self, **inputs: Any) -> None:
-        """Set the inputs and raise Execute (takes effect at the next scan)."""
-        self.set(**inputs)
-        self["EXECUTE"] = True
-
-    def outputs(self) -> dict:
-        return {k.upper(): v for k, v in self.bench.plc[self.path].items()}
-
     def run(self, max_scans: int = 20_000, release: bool = True, **inputs: Any) -> Result:
         """Execute with these inputs, step until Done, Error or CommandAborted, then (release) drop
         Execute and step once. `scans` counts the scans from the Execute scan to the finishing one."""
-        self.start(**inputs)
-        sim = self.bench.sim
-        scans = 0
-        while scans < max_scans:
-            sim.step(1)
-            scans += 1
-            done, busy, error = self.flags()
-            aborted = self._aborted()
-            if done or error or aborted:
-                break
-        else:
-            raise AssertionError(f"{self.name} still busy after {max_scans} scans")
-        out = self.outputs()
-        res = Result(done, busy, error, self["ERRORID"], scans, out, aborted)
-        if release:
-            self["EXECUTE"] = False
-            sim.step(1)
-        return res
+        return super().run(scans=max_scans, release=release, **inputs)
 
     def _aborted(self) -> bool:
-        try:
-            return bool(self["COMMANDABORTED"])
-        except Exception:
-            return False
+        return bool(self._member("COMMANDABORTED"))
 
 
-class Bench:
-    """The testbench PLC with `nodes` emulated E1100 drives (node IDs 1..nodes) on one simulated bus."""
+class Bench(Rig):
+    """The testbench PLC with `nodes` emulated E1100 drives (node IDs 1..nodes) on one simulated bus: the
+    plugin's rig, with the channels of nodes 1..n enabled and ready. A subclass names another testbench
+    (source) and its program (prog)."""
 
     source = TESTBENCH
     prog = PROG
 
     def __init__(self, nodes: int = 1, *, bitrate: int = 500_000, timings: Any = None, backend: str = "auto",
                  enable: bool = True, drive_kwargs: dict | None = None, task_ms: int = 1):
-        from linmot_st.bus import SimBus
-        from linmot_st.cosim import CoSim
         from linmot_st.emulator import DriveTimings, E1100Drive
-        from linmot_st.plc import Plc
 
-        self.build = bench_build(backend, task_ms, self.source)
-        self.plc = Plc(self.build)
-        self.bus = SimBus(bitrate)
-        self.drives = {}
-        for n in range(1, nodes + 1):
-            drive = E1100Drive(n, timings=timings or DriveTimings.fast(), **(drive_kwargs or {}))
-            self.bus.attach(drive, f"drive{n}")
-            drive.power_on(0)
-            self.drives[n] = drive
-        self.sim = CoSim(self.plc, self.bus, mailbox=MAILBOX)
+        timings = timings or DriveTimings.fast()
+        super().__init__(bench_build(backend, task_ms, self.source), nodes=range(1, nodes + 1), bitrate=bitrate, mailbox=MAILBOX,
+                         drive_factory=lambda n: E1100Drive(n, timings=timings, **(drive_kwargs or {})))
         if enable:
             for n in range(1, nodes + 1):
                 self.plc[f"{self.prog}.CH{n}.NODEID"] = n
@@ -182,15 +122,8 @@ class Bench:
                                            for n in range(1, nodes + 1)), max_scans=20_000)
             self.step(2)
 
-    @property
-    def drive(self):
-        return self.drives[1]
-
     def fb(self, name: str) -> Fb:
         return Fb(self, name)
-
-    def step(self, n: int = 1) -> None:
-        self.sim.step(n)
 
     def __getitem__(self, path: str) -> Any:
         return self.plc[f"{self.prog}.{path}"]

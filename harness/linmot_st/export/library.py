@@ -17,11 +17,11 @@ import textwrap
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from linmot_st import resources
 from linmot_st.toolchain import sources as _sources
 from linmot_st.toolchain.builtin import ast as A
 
 END_KEYWORDS = {"FUNCTION": "END_FUNCTION", "FUNCTION_BLOCK": "END_FUNCTION_BLOCK", "PROGRAM": "END_PROGRAM"}
-REPO = Path(__file__).resolve().parents[3]
 
 
 class ExportError(Exception):
@@ -60,6 +60,7 @@ class Library:
     types: list[TypeEntry]
     pous: list[PouEntry]
     configurations: list[A.Configuration]
+    search: list[Path] = field(default_factory=list)    # folders searched for includes before the root
 
     @property
     def counts(self) -> dict[str, int]:
@@ -70,14 +71,16 @@ class Library:
 
 
 def default_entry(cwd: Path | None = None) -> Path:
-    """st_lib/linmot.st of the nearest folder (cwd or an ancestor) that holds it, else of this checkout."""
+    """st_lib/linmot.st of the nearest folder (cwd or an ancestor) that holds it, else the one this
+    linmot-st comes with (linmot_st.resources)."""
     here = (cwd or Path.cwd()).resolve()
     for folder in [here, *here.parents]:
         if (folder / _sources.LIBRARY_MARKER).is_file():
             return folder / _sources.LIBRARY_MARKER
-    if (REPO / _sources.LIBRARY_MARKER).is_file():
-        return REPO / _sources.LIBRARY_MARKER
-    raise ExportError("st_lib/linmot.st not found in the current folder or its parents; give the entry file")
+    try:
+        return resources.library_tree() / _sources.LIBRARY_MARKER
+    except resources.LibraryNotFound as exc:
+        raise ExportError(str(exc)) from None
 
 
 def read_library(entry: str | Path | None = None, check: bool = True) -> Library:
@@ -90,8 +93,9 @@ def read_library(entry: str | Path | None = None, check: bool = True) -> Library
     except _sources.SourceError as exc:
         raise ExportError(str(exc)) from None
     root = _sources.include_root(path)
+    search = _sources.library_search(root)
     try:
-        elements, files, names = load(path, root)
+        elements, files, names = load(path, root, search)
         if check:
             from linmot_st.toolchain.builtin.checker import Checker
             Checker().check(elements, names)
@@ -99,7 +103,7 @@ def read_library(entry: str | Path | None = None, check: bool = True) -> Library
         raise ExportError(f"{names_or(path, root)} does not compile:\n{exc}") from None
 
     texts = {name: _FileIndex(read_source(f)) for f, name in zip(files, names)}
-    lib = Library(path, root, list(files), list(names), elements, [], [], [])
+    lib = Library(path, root, list(files), list(names), elements, [], [], [], search)
     for el in elements:
         if isinstance(el, A.TypeBlock):
             for decl in el.decls:

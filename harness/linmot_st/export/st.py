@@ -42,7 +42,7 @@ def sources_digest(files: list[Path]) -> str:
 def export_st(entry: str | Path | None = None) -> StExport:
     """The library of `entry` (default st_lib/linmot.st) as one ST text. Raises ExportError."""
     lib = read_library(entry)
-    body = _expand(lib.entry, lib.root, set())
+    body = _expand(lib.entry, lib.root, lib.search, set())
     text = header(lib) + "\n" + body.rstrip("\n") + "\n"
     _verify(text, lib)
     return StExport(text, lib)
@@ -64,14 +64,14 @@ def header(lib: Library) -> str:
     )
 
 
-def _expand(path: Path, root: Path, stack: set[Path]) -> str:
+def _expand(path: Path, root: Path, search: list[Path], stack: set[Path]) -> str:
     """The text of `path` with its top-level include pragmas replaced by the files they name."""
     from linmot_st.toolchain.builtin.loader import display_name, read_source
     from linmot_st.toolchain.builtin.parser import parse
     from linmot_st.toolchain.sources import INCLUDE_PRAGMA, resolve_include
 
     text = read_source(path)
-    items = parse(text, display_name(path, root))   # the compiler's reading: only top-level pragmas count
+    items = parse(text, display_name(path, root, search))   # the compiler's reading: only top-level pragmas count
     line_starts = [0]
     for i, ch in enumerate(text):
         if ch == "\n":
@@ -82,11 +82,11 @@ def _expand(path: Path, root: Path, stack: set[Path]) -> str:
         if not m:
             continue
         start = line_starts[el.pos.line - 1] + el.pos.col - 1
-        target = resolve_include(m.group(1), root)   # the loader has rejected missing files already
+        target = resolve_include(m.group(1), root, search)   # the loader has rejected missing files already
         if target in stack:          # the loader has rejected cycles already; never loop here
             raise ExportError(f"{el.pos}: include cycle through {m.group(1)}")
         out.append(text[last:start])
-        inner = _expand(target, root, stack | {target}).strip("\n")
+        inner = _expand(target, root, search, stack | {target}).strip("\n")
         out.append(f"(* ==== {m.group(1)} ==== *)\n{inner}\n(* ==== end of {m.group(1)} ==== *)")
         last = start + len(el.text)
     out.append(text[last:])

@@ -94,12 +94,15 @@ def _code_digest(paths: list[Path]) -> str:
 
 
 def build(path: str | os.PathLike, backend: str = "auto", out: str | os.PathLike | None = None, *,
-          cache_dir: str | os.PathLike | None = None, use_cache: bool = True) -> BuildResult:
-    """Build a .st file or a project folder (its plc.st) into a shared library and its manifest."""
+          cache_dir: str | os.PathLike | None = None, use_cache: bool = True,
+          root: str | os.PathLike | None = None) -> BuildResult:
+    """Build a .st file or a project folder (its plc.st) into a shared library and its manifest. `root`:
+    the folder include paths resolve against (default: the nearest ancestor holding st_lib/linmot.st,
+    else the current directory); a root without st_lib/ gets the library tree on its include path."""
     t0 = time.perf_counter()
     chosen = choose_backend(backend)
     try:
-        src = _sources.collect(path)
+        src = _sources.collect(path, root=root)
     except _sources.SourceError as exc:
         raise SourcePathError([f"error: {exc}"], chosen) from None
 
@@ -141,10 +144,11 @@ def build(path: str | os.PathLike, backend: str = "auto", out: str | os.PathLike
         "glue": _code_digest(cc.GLUE_SOURCES),
         "entry": src.entry_rel,
         "root": str(src.root),
+        "search": [str(p) for p in src.search],
         "sources": {_sources.rel_name(f, src.root): _cache.file_digest(f) for f in src.files},
         "missing": src.missing,
     })
-    store = _cache.Cache(Path(cache_dir) if cache_dir else _cache.default_dir(src.root, src.in_tree))
+    store = _cache.Cache(Path(cache_dir) if cache_dir else _cache.default_dir(src.root, src.writable_tree))
     entry = store.lookup(key) if use_cache else None
     cached = entry is not None
     if entry is None:
@@ -264,7 +268,7 @@ def _builtin_generate(src: _sources.Sources, c_dir: Path) -> tuple[dict, list[Pa
     from . import builtin
     error_cls = getattr(builtin, "BuiltinCompileError", ())
     try:
-        out = builtin.compile_to_c(src.entry, src.root, c_dir)
+        out = builtin.compile_to_c(src.entry, src.root, c_dir, search=src.search)
     except Exception as exc:
         if error_cls and isinstance(exc, error_cls):
             diags = [str(d) for d in (getattr(exc, "diagnostics", None) or [])] or str(exc).splitlines()

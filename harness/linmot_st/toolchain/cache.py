@@ -28,15 +28,15 @@ META_NAME = "meta.json"
 def default_dir(root: Path, in_tree: bool = True) -> Path:
     """$LINMOT_ST_CACHE; else build/cache in a library tree (`make clean` removes it); else, for a file
     outside any tree, the user's cache folder ($XDG_CACHE_HOME/linmot-st or ~/.cache/linmot-st) rather
-    than a build/ folder in whatever directory the command ran from."""
+    than a build/ folder in whatever directory the command ran from (so too for the installed package's copy
+of the library, which is no place to write)."""
     env = os.environ.get("LINMOT_ST_CACHE")
     if env:
         return Path(env).expanduser()
     if in_tree:
         return root / "build" / "cache"
-    xdg = os.environ.get("XDG_CACHE_HOME")
-    base = Path(xdg).expanduser() if xdg and Path(xdg).is_absolute() else Path.home() / ".cache"
-    return base / "linmot-st"
+    from linmot_st.resources import user_cache_dir
+    return user_cache_dir()
 
 
 def file_digest(path: Path) -> str:

@@ -31,6 +31,9 @@ def register(subparsers) -> None:
 
 def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument("path", metavar="PATH", help="a .st file or a project folder (entry file plc.st)")
+    p.add_argument("--root", metavar="DIR", default=None,
+                   help="the folder include paths resolve against (default: the nearest ancestor holding "
+                        "st_lib/linmot.st, else the current folder)")
     p.add_argument("--backend", choices=["auto", "matiec", "builtin"], default="auto",
                    help="auto: matiec when iec2c is found, else builtin (default)")
     p.add_argument("--verbose", action="store_true",
@@ -54,7 +57,7 @@ def _build(args, out=None, use_cache=True):
         why = "iec2c found" if chosen == "matiec" else "iec2c not found"
         print(f"backend: {chosen} (auto: {why})", file=sys.stderr)
     try:
-        res = build(args.path, backend=args.backend, out=out, use_cache=use_cache)
+        res = build(args.path, backend=args.backend, out=out, use_cache=use_cache, root=args.root)
     except OSError as exc:      # the cache or output folder cannot be written, a source cannot be read...
         print(f"error: {exc}", file=sys.stderr)
         raise _Failed(1) from None

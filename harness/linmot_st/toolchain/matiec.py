@@ -164,10 +164,28 @@ def timeout_s() -> float | None:
     return value if value > 0 else None
 
 
+def include_folder(m: Matiec, search: list[Path], folder: Path) -> Path:
+    """iec2c searches one folder before its working directory: the -I folder, which must hold MatIEC's own
+    library (ieclib.txt and the files it includes). For a build with the library tree on its search path
+    (sources.library_search), `folder` gets links to MatIEC's library files and to the tree's st_lib/ and
+    plc_project/, and serves as that -I folder."""
+    from linmot_st.resources import TREES
+    folder.mkdir(parents=True, exist_ok=True)
+    links = {p.name: p for p in m.lib.iterdir()}
+    for tree in search:
+        links.update({name: tree / name for name in TREES if (tree / name).is_dir()})
+    for name, target in links.items():
+        link = folder / name
+        if not link.exists():
+            link.symlink_to(target.resolve())
+    return folder
+
+
 def run_iec2c(m: Matiec, sources: Sources, out_dir: Path) -> list[Path]:
     """Compile the entry file into out_dir; returns the generated files iec2c lists."""
     out_dir.mkdir(parents=True, exist_ok=True)
-    argv = [str(m.iec2c), *flags(m.iec2c), "-I", str(m.lib), "-T", str(out_dir), sources.entry_rel]
+    lib = include_folder(m, sources.search, out_dir.parent / "iec2c-include") if sources.search else m.lib
+    argv = [str(m.iec2c), *flags(m.iec2c), "-I", str(lib), "-T", str(out_dir), sources.entry_rel]
     limit = timeout_s()
     try:
         proc = subprocess.run(argv, cwd=sources.root, capture_output=True, text=True, check=False, timeout=limit)
@@ -176,6 +194,9 @@ def run_iec2c(m: Matiec, sources: Sources, out_dir: Path) -> list[Path]:
                f"(set {TIMEOUT_ENV} to a longer time in seconds, or 0 for none; MatIEC takes minutes on "
                f"very large arrays)")
         raise MatiecError(msg, [msg]) from None
+    finally:
+        if lib != m.lib:
+            shutil.rmtree(lib, ignore_errors=True)
     if proc.returncode != 0:
         diags = diagnostics_from(proc.stderr + ("\n" + proc.stdout if proc.returncode != 1 else ""),
                                  sources.entry_rel, proc.returncode)
@@ -434,7 +455,7 @@ def describe(out_dir: Path, generated: list[Path], sources: Sources, m: Matiec,
             parse_header(path.read_text(), ct, header)
     parse_header(read_with_local_includes(out_dir / "POUS.h"), ct)
     try:
-        decls = st_decls.scan_paths(sources.files, sources.root)
+        decls = st_decls.scan_paths(sources.files, sources.root, sources.search)
     except BuiltinCompileError as exc:   # iec2c took it, but the declarations cannot be read (an IL body, say)
         diags = [*map(str, exc.diagnostics),
                  "note: the MatIEC backend reads array bounds and POU positions with the builtin parser, "

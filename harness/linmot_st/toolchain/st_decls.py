@@ -100,7 +100,6 @@ def scan(files: list[tuple[str, str]]) -> Declarations:
     return decls
 
 
-def scan_paths(paths: list[Path], root: Path) -> Declarations:
-    from .builtin.loader import read_source
-    from .sources import rel_name
-    return scan([(rel_name(p, root), read_source(p)) for p in paths])
+def scan_paths(paths: list[Path], root: Path, search: list[Path] = ()) -> Declarations:
+    from .builtin.loader import display_name, read_source
+    return scan([(display_name(p, root, search), read_source(p)) for p in paths])

@@ -59,11 +59,12 @@ def backend_version() -> str:
     return "builtin-" + h.hexdigest()[:12]
 
 
-def compile_to_c(entry_file: Path, include_root: Path, out_dir: Path) -> BuiltinOutput:
-    """Compile an ST entry file (and its includes) to C + manifest in out_dir."""
+def compile_to_c(entry_file: Path, include_root: Path, out_dir: Path, search: list[Path] = ()) -> BuiltinOutput:
+    """Compile an ST entry file (and its includes) to C + manifest in out_dir; includes are looked up in
+    `search`, then under include_root (iec2c's -I folder, then its working directory)."""
     from .loader import load
     entry_file, include_root, out_dir = Path(entry_file), Path(include_root), Path(out_dir)
-    elements, sources, names = load(entry_file, include_root)
+    elements, sources, names = load(entry_file, include_root, search)
     c_text, manifest = _translate(elements, names)
     return _write(c_text, manifest, out_dir, sources)
 

@@ -17,11 +17,15 @@ from .parser import parse
 MAX_DEPTH = 16
 
 
-def display_name(path: Path, root: Path) -> str:
-    try:
-        return path.resolve().relative_to(root.resolve()).as_posix()
-    except ValueError:
-        return str(path)
+def display_name(path: Path, root: Path, search: list[Path] = ()) -> str:
+    """The path relative to the include root, else to the search folder it was found in (as iec2c names
+    an included file by its include path), else absolute."""
+    for folder in (root, *search):
+        try:
+            return path.resolve().relative_to(Path(folder).resolve()).as_posix()
+        except ValueError:
+            continue
+    return str(path)
 
 
 def read_source(path: Path) -> str:
@@ -32,15 +36,16 @@ def read_source(path: Path) -> str:
         return data.decode("latin-1")
 
 
-def load(entry: Path, root: Path) -> tuple[list[A.Node], list[Path], list[str]]:
-    """(declarations in order, files read, their display names). Raises BuiltinCompileError."""
+def load(entry: Path, root: Path, search: list[Path] = ()) -> tuple[list[A.Node], list[Path], list[str]]:
+    """(declarations in order, files read, their display names). Includes are looked up in `search`
+    first, then under `root` (sources.resolve_include). Raises BuiltinCompileError."""
     elements: list[A.Node] = []
     files: list[Path] = []
     names: list[str] = []
     diags: list[Diagnostic] = []
 
     def visit(path: Path, stack: list[Path], where: A.Pos | None) -> None:
-        name = display_name(path, root)
+        name = display_name(path, root, search)
         try:
             text = read_source(path)
         except OSError as exc:
@@ -58,7 +63,7 @@ def load(entry: Path, root: Path) -> tuple[list[A.Node], list[Path], list[str]]:
             if isinstance(el, A.Pragma):
                 m = INCLUDE_PRAGMA.fullmatch(el.text.strip())
                 if m:
-                    target = resolve_include(m.group(1), root)
+                    target = resolve_include(m.group(1), root, list(search))
                     if target is None:
                         diags.append(Diagnostic(el.pos.file, el.pos.line, el.pos.col,
                                                 f'cannot find included file "{m.group(1)}" under {root}'))

@@ -1,0 +1,15 @@
+"""Testing a user's PLC code with pytest: the linmot-st pytest plugin and what it is made of.
+
+  rig.py        Rig / RealTimeRig: the user's PLC co-simulated against emulated E1100 drives, with the
+                helpers a test needs (step until a condition, expect an FB Done, variables, faults)
+  project.py    the user's project as the plugin sees it (ini options), and its builds
+  stunit_lib.py the ST assertion library (st_lib/stunit/stunit.st) and how its failures read
+  stunit.py     tests written in ST: discovery, the generated runner, one pytest item per test
+  plugin.py     the pytest plugin (entry point pytest11 `linmot_st`): fixtures, markers, options
+
+docs/testing.md is the user's guide.
+"""
+
+from .rig import FbFailed, FbResult, RealTimeRig, Rig, RigTimeout
+
+__all__ = ["Rig", "RealTimeRig", "RigTimeout", "FbFailed", "FbResult"]
