@@ -102,8 +102,9 @@ def test_the_example_project_passes_as_a_user_runs_it(tmp_path):
                           text=True, timeout=900)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     cases = {c.get("name"): c for c in ET.parse(tmp_path / "report.xml").getroot().iter("testcase")}
-    assert {"Test_StationBecomesReady", "Test_StationWaitsForTheDrive",
-            "test_the_station_commissions_its_axis_and_reads_its_limits[builtin]"} <= set(cases)
+    assert {"Test_StationCommissionsThenRunsItsJob", "Test_StationWaitsForTheDrive",
+            "test_the_station_commissions_its_axis_and_reads_its_limits[builtin]",
+            "test_the_station_moves_then_runs_its_curve[builtin]"} <= set(cases)
     failed = [n for n, c in cases.items() if c.find("failure") is not None or c.find("error") is not None]
     assert failed == []
     assert "no SocketCAN interface vcan0" in proc.stdout or os.path.exists("/sys/class/net/vcan0")

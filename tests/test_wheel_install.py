@@ -89,9 +89,9 @@ def test_every_command_works_from_an_empty_folder(installed, tmp_path):
     exe = str(bin_ / "linmot-st")
     work = tmp_path / "empty"
     work.mkdir()
-    # every subcommand's --help, in one process (motion too, once it exists; bench is the checkout's)
+    # every subcommand's --help, in one process (bench is the checkout's)
     helped = _run([str(bin_ / "python"), "-c", HELP_ALL], work, env).stdout.split()
-    assert {"build", "run", "emulate", "commission", "export", "init"} <= set(helped), helped
+    assert {"build", "run", "emulate", "commission", "motion", "export", "init"} <= set(helped), helped
 
     _run([exe, "export", "st", "lib.st"], work, env)
     assert "FUNCTION_BLOCK FB_LmCommission" in (work / "lib.st").read_text()
@@ -102,12 +102,16 @@ def test_every_command_works_from_an_empty_folder(installed, tmp_path):
         shutil.copy(REPO / "examples" / pvl, work / pvl)
         out = _run([exe, "commission", pvl, "--drive-timings", "fast"], work, env).stdout
         assert "result: PASSED" in out, out
+    out = _run([exe, "motion", "two_axes.pvl", "--drive-timings", "fast", "--report", "motion"], work, env).stdout
+    assert "PASSED" in out, out
+    assert (work / "motion" / "motion.md").is_file()
 
     _run([exe, "emulate", "--interface", "virtual", "--channel", "wheel-test", "--fast", "--duration", "0.2"], work, env)
 
     site = next((bin_.parent / "lib").glob("python*/site-packages/linmot_st"))
     assert not (site / "build").exists()                     # nothing was written into the installed package
-    assert sorted(p.name for p in work.iterdir()) == ["lib.st", "lib.xml", "seed_parameters.pvl", "two_axes.pvl"]
+    assert sorted(p.name for p in work.iterdir()) == ["lib.st", "lib.xml", "motion", "seed_parameters.pvl",
+                                                      "two_axes.pvl"]
 
 
 def test_init_build_run_and_pytest_of_a_new_project(installed, tmp_path):
@@ -125,4 +129,4 @@ def test_init_build_run_and_pytest_of_a_new_project(installed, tmp_path):
     tail = proc.stdout.strip().splitlines()[-1]
     assert " passed" in tail and "failed" not in tail, proc.stdout
     report = (station / "report.xml").read_text()
-    assert 'name="Test_StationBecomesReady"' in report           # the ST tests ran as pytest items
+    assert 'name="Test_StationCommissionsThenRunsItsJob"' in report           # the ST tests ran as pytest items

@@ -11,6 +11,7 @@ from linmot_st.pvl import load_pvl
 from linmot_st.pvl.to_st import to_st
 
 STATION = "MAIN.STATION"
+MM = 10_000                                     # the drive's position unit is 0.1 um
 PVL = load_pvl("drive.pvl")
 
 
@@ -32,13 +33,42 @@ def test_the_dataset_is_generated_from_drive_pvl(linmot_project):
 @pytest.mark.each_backend
 def test_the_station_commissions_its_axis_and_reads_its_limits(rig):
     rig.watch(f"{STATION}.STATE", f"{STATION}.ERRORID")
-    rig.step_until(f"{STATION}.READY", ms=60_000)
+    rig.step_until(f"{STATION}.COMMISSIONED", ms=60_000)
     assert rig[f"{STATION}.MAXPOSITION"] == MAX_POSITION
     assert rig[f"{STATION}.MINPOSITION"] == MIN_POSITION
     # what the PLC wrote is in the drive: a parameter, the curves and the command table, in flash
     assert rig.drive.params[0x1600].rom == MAX_POSITION & 0xFFFFFFFF
     assert sorted(rig.drive.curves.flash) == sorted(c.curve_id for c in PVL.curves)
     assert len(rig.drive.ct.flash) == len(PVL.command_table)
+
+
+@pytest.mark.each_backend
+def test_the_station_moves_then_runs_its_curve(rig):
+    """The job: a move to MoveTarget (20 mm), then curve 1 of drive.pvl from there. The emulated drive's
+    trajectory shows what the axis did: the move's end, then the curve's shape as drive.pvl has it."""
+    rig.watch(f"{STATION}.STATE", f"{STATION}.ERRORID", f"{STATION}.DRIVEERROR")
+    rig.step_until(f"{STATION}.STATE = ST_CURVE", ms=90_000)
+    t_curve = rig.time_ns
+    assert abs(rig.drive.mc.axis.position - 20 * MM) <= 0.1 * MM            # the move ended at 20 mm
+    rig.step_until(f"{STATION}.READY", ms=5_000)
+    curve = next(c for c in PVL.curves if c.curve_id == 1)
+    run = [s for s in rig.drive.mc.trajectory.between(t_curve) if s.demand != 20 * MM]
+    duration_ms = (run[-1].t_ns - run[0].t_ns) / 1e6
+    assert abs(duration_ms - 400) <= 2                                        # "MinJerk_100mm_400ms"
+    assert abs(run[-1].demand - (20 * MM + curve.setpoints[-1])) <= 1         # from where the move ended
+    assert abs(rig.drive.mc.axis.position - 120 * MM) <= 0.1 * MM
+    assert rig[f"{STATION}.ERRORID"] == 0
+
+
+def test_a_move_target_outside_the_limits_moves_nothing(rig):
+    """The station checks its target against the drive's limits before it switches anything on."""
+    rig["MAIN.STATION.MOVETARGET"] = 250.0                                 # beyond MaxPosition (200 mm)
+    rig.step_until(f"{STATION}.ERROR", ms=60_000, watch=[f"{STATION}.STATE"])
+    assert name_of(rig[f"{STATION}.ERRORID"]) == "PositionRange"
+    rig.step(500)
+    rxpdos = [e for e in rig.frames(0) if e.frame.can_id in (0x201, 0x301, 0x401)]
+    assert rxpdos == []                                                     # not even powered
+    assert rig.drive.mc.state != 8
 
 
 def test_the_commissioning_fb_is_done_within_its_budget(rig):
