@@ -73,6 +73,7 @@ ERRORS: tuple[ErrorDef, ...] = (
     ErrorDef("Evicted", 0x0205, "the FB was not called while it held the channel and lost its turn"),
     ErrorDef("TxFull", 0x0206, "the mailbox Tx array was full: frame not queued"),
     ErrorDef("DriveRebooted", 0x0207, "the drive sent a boot-up message during the service"),
+    ErrorDef("NodeIdInUse", 0x0208, "another channel of the same mailbox owns this node ID: nothing is sent for it"),
     # 03xx transfer
     ErrorDef("SdoTimeout", 0x0301, "no SDO response within the timeout"),
     ErrorDef("SdoAbort", 0x0302, "the drive answered with an SDO abort (code on the AbortCode output)"),

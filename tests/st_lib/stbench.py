@@ -155,7 +155,8 @@ class Bench:
     """The testbench PLC with `nodes` emulated E1100 drives (node IDs 1..nodes) on one simulated bus."""
 
     def __init__(self, nodes: int = 1, *, bitrate: int = 500_000, timings: Any = None, backend: str = "auto",
-                 enable: bool = True, drive_kwargs: dict | None = None, task_ms: int = 1):
+                 enable: bool = True, drive_kwargs: dict | None = None, task_ms: int = 1,
+                 echo: bool | None = None):
         from linmot_st.bus import SimBus
         from linmot_st.cosim import CoSim
         from linmot_st.emulator import DriveTimings, E1100Drive
@@ -170,7 +171,7 @@ class Bench:
             self.bus.attach(drive, f"drive{n}")
             drive.power_on(0)
             self.drives[n] = drive
-        self.sim = CoSim(self.plc, self.bus, mailbox=MAILBOX)
+        self.sim = CoSim(self.plc, self.bus, mailbox=MAILBOX, echo=echo)   # echo None: TxEcho on
         if enable:
             for n in range(1, nodes + 1):
                 self.plc[f"{PROG}.CH{n}.NODEID"] = n

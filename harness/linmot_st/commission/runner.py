@@ -359,7 +359,8 @@ class _RecordingBus:
 
     def recv(self, timeout=None):
         msg = self.bus.recv(timeout=timeout)
-        if msg is not None and not (msg.is_error_frame or msg.is_extended_id or getattr(msg, "is_fd", False)):
+        if (msg is not None and getattr(msg, "is_rx", True)       # the PLC's own echoes: recorded by send
+                and not (msg.is_error_frame or msg.is_extended_id or getattr(msg, "is_fd", False))):
             self._record(msg, f"node{msg.arbitration_id & 0x7F}")
         return msg
 
@@ -382,9 +383,9 @@ def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s) -
     plc_bus = None
     bit_ns = 1_000_000_000 // opts.bitrate
     try:
-        def opened():
+        def opened(**kwargs):
             try:
-                return open_bus(spec, bitrate=opts.bitrate)
+                return open_bus(spec, bitrate=opts.bitrate, **kwargs)
             except OSError as exc:
                 raise OSError(f"--bus {opts.bus}: cannot open it ({exc}); SocketCAN needs a Linux kernel with "
                               "CAN support and the interface up (docs/bus.md)") from exc
@@ -394,10 +395,16 @@ def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s) -
                 drive_buses.append(opened())
                 drives[n] = factory(n)
         before = {n: drive_state(d) for n, d in drives.items()}
-        plc_bus = _RecordingBus(opened(), time.monotonic_ns(), bit_ns)
+        # the PLC's own frames come back once sent: the mailbox's transmit confirmation (TxEcho), where
+        # the interface can give them
+        try:
+            raw, echo = opened(receive_own_messages=True), True
+        except TypeError:
+            raw, echo = opened(), False
+        plc_bus = _RecordingBus(raw, time.monotonic_ns(), bit_ns)
         for b, d in zip(drive_buses, drives.values()):
             d.attach(b)                                  # switched on now: boots after its boot time
-        sim = RealTimeCoSim(plc, plc_bus, mailbox=MAILBOX)
+        sim = RealTimeCoSim(plc, plc_bus, mailbox=MAILBOX, echo=echo)
         _configure(plc, opts, nodes)
         if prepare_plc:
             prepare_plc(plc)
