@@ -57,9 +57,11 @@ def test_two_axes_layout():
     curve = w.index(0x03170000 | 10)                                         # curve 23, 10 setpoints
     assert w[curve + 1:curve + 3] == [0x00030046, 0x0004000A]                # the seeds' info words
     assert w[-2:] == [0xFF000000, 0]
-    # 6 layer reads + 30 writes + (1 + 3 x 19 + 474) curves + (1 + 3 x 33) CT + 4 flash + 30 + 531 + 99 verify
-    assert dsf.expected_exchanges(dsf.decode(w)) == 1332
-    assert dsf.expected_exchanges(dsf.decode(w), verify=False, flash=False) == 6 + 30 + 532 + 100
+    # 6 layer reads + 4 x 30 pre-flight + 30 writes + (1 + 3 x 19 + 474) curves + (1 + 3 x 33) CT + 4 flash
+    # + 30 + 531 + 99 verify
+    assert dsf.expected_exchanges(dsf.decode(w)) == 1332 + 120
+    assert dsf.expected_exchanges(dsf.decode(w), preflight=False) == 1332
+    assert dsf.expected_exchanges(dsf.decode(w), verify=False, flash=False) == 6 + 120 + 30 + 532 + 100
 
 
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])

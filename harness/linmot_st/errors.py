@@ -85,6 +85,7 @@ ERRORS: tuple[ErrorDef, ...] = (
     ErrorDef("UploadTooBig", 0x0308, "the curve on the drive has more setpoints than T_LmSetpoints holds, or a data size not a multiple of 4"),
     ErrorDef("UploadInconsistent", 0x0309, "uploaded curve: the info block's setpoints x 4 differ from the data size"),
     ErrorDef("ListFull", 0x030A, "UPID list longer than T_LmUpidList holds (the list holds the first 2048)"),
+    ErrorDef("NotOperational", 0x030B, "after its boot-up the drive did not report NMT Operational within BootTimeout (FailActual = the last NMT state it reported, 00h none)"),
     # 04xx E1100 result codes (16#0400 + rr)
     ErrorDef("ResultBase", RESULT_BASE, "E1100 result code rr: ErrorID = 16#0400 + rr (the named ones follow)"),
     ErrorDef("ResultNotFinished", RESULT_BASE + 0x04, "result 04h: block not finished where the end was expected / flash busy"),
@@ -108,6 +109,11 @@ ERRORS: tuple[ErrorDef, ...] = (
     ErrorDef("DatasetInvalid", 0x0601, "commissioning dataset malformed: magic word, format version, counts or record order wrong (FailStep = the word index)"),
     ErrorDef("ResetNeedsFlash", 0x0602, "reset requested without the flash save while the dataset holds curves or command-table entries (the reset would lose them)"),
     ErrorDef("VerifyMismatch", 0x0603, "read-back differs from the dataset (FailItem, FailStep, FailExpected, FailActual say where)"),
+    ErrorDef("NoSuchUpid", 0x0604, "pre-flight: the drive has no parameter with this UPID (FailItem); nothing was written"),
+    ErrorDef("NotWritable", 0x0605, "pre-flight: the drive's parameter cannot be written (its address usage has no ROM write); nothing was written"),
+    ErrorDef("AboveMax", 0x0606, "pre-flight: the dataset's value (FailActual) is above the drive's maximum (FailExpected); nothing was written"),
+    ErrorDef("BelowMin", 0x0607, "pre-flight: the dataset's value (FailActual) is below the drive's minimum (FailExpected); nothing was written"),
+    ErrorDef("CurveMemory", 0x0608, "pre-flight: the curves need more bytes (FailActual) than the drive's curve memory (FailExpected, the CurveMemory input); nothing was written"),
 )
 
 BY_VALUE: dict[int, ErrorDef] = {e.value: e for e in ERRORS}

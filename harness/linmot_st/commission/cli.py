@@ -51,6 +51,12 @@ def register(subparsers) -> None:
                         "a restart (default on)")
     p.add_argument("--verify", action=argparse.BooleanOptionalAction, default=True,
                    help="the PLC reads everything back (default on)")
+    p.add_argument("--preflight", action=argparse.BooleanOptionalAction, default=True,
+                   help="before the first write, the PLC asks each drive whether it has every UPID, may write it "
+                        "and takes its value, and whether the curves fit (default on)")
+    p.add_argument("--curve-memory", type=int, default=None, metavar="BYTES",
+                   help="the drives' curve memory for the pre-flight (70 + 4 x setpoints per curve); default: "
+                        "the emulated drives' (256 KiB), 0 (not checked) with --no-emulate")
     p.add_argument("--drive-timings", choices=("real", "fast"), default=None,
                    help="emulated drive durations (boot 4 s, MC start 3 s, ...) or short ones "
                         "(default: real on the simulated bus, fast on real-time buses)")
@@ -74,7 +80,10 @@ def command_line(args: argparse.Namespace) -> str:
             parts += [flag, f"{value:g}" if isinstance(value, float) else str(value)]
     if args.node_ids:
         parts += ["--node-ids", ",".join(map(str, args.node_ids))]
-    for name, default in (("live_ram", False), ("flash", True), ("reset", True), ("verify", True)):
+    if args.curve_memory is not None:
+        parts += ["--curve-memory", str(args.curve_memory)]
+    for name, default in (("live_ram", False), ("flash", True), ("reset", True), ("verify", True),
+                          ("preflight", True)):
         if getattr(args, name) != default:
             parts.append(f"--{'' if getattr(args, name) else 'no-'}{name.replace('_', '-')}")
     if not args.emulate:
@@ -132,6 +141,7 @@ def run_command(args: argparse.Namespace) -> int:
         return 2
     opts = RunOptions(axes=axes, node_ids=args.node_ids, bus=args.bus, bitrate=args.bitrate,
                       live_ram=args.live_ram, flash=args.flash, reset=args.reset, verify=args.verify,
+                      preflight=args.preflight, curve_memory=args.curve_memory,
                       timings=args.drive_timings, timeout_s=args.timeout, emulate=args.emulate)
     try:
         opts.nodes()

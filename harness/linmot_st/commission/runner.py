@@ -19,7 +19,7 @@ from typing import Any, Callable
 
 from .project import INSTANCE, MAILBOX, MAX_AXES
 
-PHASES = ("idle", "start", "check", "params", "curves", "ct", "flash", "reset", "verify", "done")
+PHASES = ("idle", "wait", "start", "check", "preflight", "params", "curves", "ct", "flash", "reset", "verify", "done")
 
 
 def phase_name(enum_value: str) -> str:
@@ -53,6 +53,9 @@ class RunOptions:
     flash: bool = True
     reset: bool = True
     verify: bool = True
+    preflight: bool = True                     # the FB asks each drive whether it can take the dataset first
+    curve_memory: int | None = None            # bytes of curve memory (CurveMemory); None: the emulated
+                                               # drive's capacity, 0 with real drives (not checked)
     timings: str | None = None                 # "real" | "fast"; default real on sim, fast on real-time buses
     latency_ns: int = 0                        # extra latency of the drives' frames on the simulated bus
     timeout_s: float | None = None             # virtual (sim) or wall seconds; default from the dataset
@@ -111,6 +114,8 @@ class AxisResult:
     drive_layer: tuple[int, int, int] = (0, 0, 0)
     exchanges: int = 0
     live_written: int = 0
+    mc_stopped: bool = False                   # the run left the drive's MC stopped (McStopped)
+    fail_delay_ns: int = 0                     # from the failure to its report (the MC restart; FailDelay)
     up_ns: int | None = None                   # when the PLC first heard the drive
     phases: list[PhaseRecord] = field(default_factory=list)
 
@@ -243,7 +248,7 @@ class Sampler:
         return phase_name(vs["phase"].value), vs["items"].value, vs["total"].value
 
 
-def _configure(plc, opts: RunOptions, nodes: list[int]) -> None:
+def _configure(plc, opts: RunOptions, nodes: list[int], curve_memory: int = 0) -> None:
     p = INSTANCE
     plc[f"{p}.AXES"] = len(nodes)
     plc[f"{p}.NODEIDS"] = nodes + [0] * (MAX_AXES - len(nodes))
@@ -252,6 +257,8 @@ def _configure(plc, opts: RunOptions, nodes: list[int]) -> None:
     plc[f"{p}.FLASH"] = opts.flash
     plc[f"{p}.RESET"] = opts.reset
     plc[f"{p}.VERIFY"] = opts.verify
+    plc[f"{p}.PREFLIGHT"] = opts.preflight
+    plc[f"{p}.CURVEMEMORY"] = curve_memory
     plc[f"{p}.START"] = True
 
 
@@ -266,12 +273,22 @@ def _collect(plc, sampler: Sampler) -> None:
         dl = c["DRIVELAYER"]
         ax.drive_layer = (dl["TREEID"], dl["MAINVERSION"], dl["SUBVERSION"])
         ax.exchanges, ax.live_written = c["EXCHANGES"], c["LIVEWRITTEN"]
+        ax.mc_stopped, ax.fail_delay_ns = bool(c["MCSTOPPED"]), c["FAILDELAY"]
+
+
+def _curve_memory(opts: RunOptions, drives: dict) -> int:
+    """CurveMemory for the FB: as given; else the smallest curve memory of the emulated drives (what a user
+    reads in the drive's documentation; the E1100 does not tell it over CANopen), 0 without them."""
+    if opts.curve_memory is not None:
+        return opts.curve_memory
+    caps = [getattr(getattr(d, "curves", None), "capacity_bytes", 0) for d in drives.values()]
+    return min(caps) if caps and all(caps) else 0
 
 
 def default_timeout_s(dataset, opts: RunOptions) -> float:
     """Generous: 4 ms per expected exchange, plus the drives' slow services (boot, MC start, flash, reset)."""
     from linmot_st.pvl.dataset import expected_exchanges
-    n = expected_exchanges(dataset, verify=opts.verify, flash=opts.flash)
+    n = expected_exchanges(dataset, verify=opts.verify, flash=opts.flash, preflight=opts.preflight)
     return 4e-3 * n + 60.0
 
 
@@ -318,7 +335,7 @@ def _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, time
     if prepare_bus:
         prepare_bus(bus, drives)
     sim = CoSim(plc, bus, mailbox=MAILBOX, name="plc")
-    _configure(plc, opts, nodes)
+    _configure(plc, opts, nodes, _curve_memory(opts, drives))
     if prepare_plc:
         prepare_plc(plc)
     sampler = Sampler(plc, nodes, progress)
@@ -405,7 +422,7 @@ def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s) -
         for b, d in zip(drive_buses, drives.values()):
             d.attach(b)                                  # switched on now: boots after its boot time
         sim = RealTimeCoSim(plc, plc_bus, mailbox=MAILBOX, echo=echo)
-        _configure(plc, opts, nodes)
+        _configure(plc, opts, nodes, _curve_memory(opts, drives))
         if prepare_plc:
             prepare_plc(plc)
         sampler = Sampler(plc, nodes, progress)
