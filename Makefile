@@ -15,6 +15,7 @@ $(STAMP): pyproject.toml
 venv: $(STAMP)
 
 demo: $(STAMP)
+	mkdir -p build
 	$(BIN)/linmot-st commission examples/two_axes.pvl --axes 2 --report build/report
 
 test: $(STAMP)

@@ -319,8 +319,10 @@ def test_command_exits_non_zero_when_the_drives_never_boot(tmp_path, capsys):
 
 
 def test_command_line_errors(tmp_path, capsys):
-    assert main(["commission", str(EXAMPLE), "--axes", "9"]) == 2
-    assert "plc_project commissions 1..8" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exit_:
+        main(["commission", str(EXAMPLE), "--axes", "9"])
+    assert exit_.value.code == 2
+    assert "linmot-st commission: error: argument --axes: 9: must be 1..8" in capsys.readouterr().err
     assert main(["commission", str(EXAMPLE), "--axes", "2", "--node-ids", "3,3"]) == 2
     assert main(["commission", str(EXAMPLE), "--axes", "3", "--node-ids", "1,2"]) == 2
     assert main(["commission", str(EXAMPLE), "--no-emulate"]) == 2
@@ -349,14 +351,18 @@ SEED_PARAMS = EXAMPLE.parent / "seed_parameters.pvl"
 
 
 @pytest.mark.parametrize("args, message", [
-    (["--report", "/proc/nope"], "error: --report /proc/nope: cannot create or write the folder"),
+    (["--report", "/proc/nope"], "linmot-st commission: error: --report /proc/nope: cannot write in /proc"),
+    (["--report", "/sys/kernel"], "error: --report /sys/kernel: cannot write in /sys/kernel"),
+    (["--trace", "/proc/run.log"], "error: --trace /proc/run.log: cannot write in /proc"),
+    (["--report", "no/such/folder"], "error: --report no/such/folder: folder no/such does not exist"),
     (["--bus", "foo"], "error: --bus 'foo': expected sim, virtual[:CHANNEL], or INTERFACE:CHANNEL"),
     (["--bus", "foo:bar"], "error: --bus 'foo:bar': python-can has no interface 'foo'"),
     (["--bus", "udp_multicast:x"], "not supported"),
     (["--trace", "run.txt"], "error: --trace run.txt: the extension says the format"),
     (["--no-flash"], "error: --no-flash with the reset (on by default)"),
     (["--no-flash", "--reset"], "Add --no-reset"),
-], ids=["report", "bus", "bus-interface", "udp", "trace", "no-flash", "no-flash-reset"])
+], ids=["report", "report-sys", "trace-proc", "report-parents", "bus", "bus-interface", "udp", "trace", "no-flash",
+        "no-flash-reset"])
 def test_bad_arguments_are_refused_before_the_build(no_build, capsys, args, message):
     assert main(["commission", str(SEED_CURVE), "-q", *args]) == 2
     assert message in capsys.readouterr().err
@@ -368,8 +374,8 @@ def test_bad_arguments_are_refused_before_the_build(no_build, capsys, args, mess
 ])
 def test_no_flash_is_accepted_where_it_can_work(no_build, tmp_path, pvl, args):
     with pytest.raises(Built):
-        main(["commission", str(pvl), "-q", "--report", str(tmp_path / "new" / "folder"), *args])
-    assert (tmp_path / "new" / "folder").is_dir()                   # created before the build
+        main(["commission", str(pvl), "-q", "--report", str(tmp_path / "folder"), *args])
+    assert list(tmp_path.iterdir()) == []                           # checked, created only when written
 
 
 def test_no_flash_without_reset_commissions_a_curve(capsys):

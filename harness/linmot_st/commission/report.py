@@ -152,7 +152,7 @@ class Report:
             axes=axes,
             run=dict(start_ms=r.t_start_ns / 1e6, end_ms=r.t_end_ns / 1e6, time_ms=span / 1e6,
                      exchanges=total_ex, necessary_exchanges=need, scans=r.scans, wall_s=round(r.wall_s, 3),
-                     timed_out=r.timed_out, plc_fault=r.fault,
+                     timed_out=r.timed_out, interrupted=r.interrupted, plc_fault=r.fault,
                      overruns=r.overruns, max_lateness_ms=r.max_lateness_ns / 1e6),
             bus=dict(frames=st.frames if st else 0, frames_in_trace=sum(1 for e in r.trace if e.status != "error"),
                      errors=st.errors if st else 0,
@@ -326,6 +326,7 @@ class Report:
             f"{run['wall_s']:.2f} s wall"
             + (f", {run['overruns']} late scans (max {run['max_lateness_ms']:.1f} ms)" if o["bus"] != "sim" else "")
             + (" - TIMED OUT" if run["timed_out"] else "")
+            + (" - INTERRUPTED (Ctrl-C)" if run.get("interrupted") else "")
             + (f" - PLC FAULT: {run['plc_fault']}" if run["plc_fault"] else ""),
             f"bus: {_n(bus['frames'], 'frame')} in that time (the trace holds {bus['frames_in_trace']}, from "
             f"switch-on), busy {bus['busy_ms']:.1f} ms = load {100 * bus['load']:.1f} %"
@@ -367,11 +368,13 @@ class Report:
                 if c.note:
                     lines.append(f"    {c.what}: {c.note}")
         res = f["result"]
-        verdict = "PASSED" if res["passed"] else "FAILED"
+        verdict = "PASSED" if res["passed"] else "INTERRUPTED" if run.get("interrupted") else "FAILED"
         why = []
         if not res["commissioned"]:
             bad = [str(a["node"]) for a in f["axes"] if a["result"] != "done"]
-            if run["plc_fault"]:
+            if run.get("interrupted"):
+                why.append("interrupted (Ctrl-C) before every axis finished")
+            elif run["plc_fault"]:
                 why.append("the PLC faulted")
             elif bad:
                 why.append(f"commissioning failed on node{'s' if len(bad) > 1 else ''} {', '.join(bad)}")
@@ -405,7 +408,7 @@ class Report:
         from .plots import plot_curve
 
         folder = Path(folder)
-        folder.mkdir(parents=True, exist_ok=True)
+        folder.mkdir(exist_ok=True)            # the folder named, not its parents
         for old in [*folder.glob("curve_*.png"), *(folder / f"can.{x}" for x in ("log", "asc", "blf"))]:
             old.unlink(missing_ok=True)
         f = self.figures or self.compute()

@@ -155,6 +155,7 @@ class RunResult:
     scans: int = 0
     wall_s: float = 0.0
     timed_out: bool = False
+    interrupted: bool = False                  # Ctrl-C ended the run (the report says what was done)
     fault: str = ""                            # a PLC fault (division by zero, index out of range) ended the run
     overruns: int = 0
     max_lateness_ns: int = 0
@@ -173,7 +174,7 @@ class RunResult:
 
     @property
     def commissioned(self) -> bool:
-        return all(a.done for a in self.axes) and not self.timed_out and not self.fault
+        return all(a.done for a in self.axes) and not self.timed_out and not self.fault and not self.interrupted
 
 
 class Sampler:
@@ -341,18 +342,21 @@ def _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, time
     sampler = Sampler(plc, nodes, progress)
     from linmot_st.plc import PlcFault
     wall0 = time.perf_counter()
-    timed_out, fault = False, ""
+    timed_out, fault, interrupted = False, "", False
     try:
         sim.run_until(sampler, max_scans=int(timeout_s * 1e9 // plc.tick_ns))
     except CoSimTimeout:
         timed_out = True
     except PlcFault as exc:
         fault = str(exc)
+    except KeyboardInterrupt:                  # Ctrl-C: stop, and report what was done so far
+        interrupted = True
     wall = time.perf_counter() - wall0
     sampler.close()
     _collect(plc, sampler)
     res = RunResult(opts, nodes, plc.tick_ns, bus.bit_ns, sampler.axes, list(bus.trace), drives,
-                    scans=sim.scans, wall_s=wall, timed_out=timed_out, fault=fault, before=before)
+                    scans=sim.scans, wall_s=wall, timed_out=timed_out, fault=fault, before=before,
+                    interrupted=interrupted)
     res.stats = bus.stats(res.t_start_ns, max(res.t_end_ns, res.t_start_ns))
     return res
 
@@ -429,13 +433,15 @@ def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s) -
         plc_bus.t0 = time.monotonic_ns()                 # trace times = PLC times
         from linmot_st.plc import PlcFault
         wall0 = time.perf_counter()
-        timed_out, fault = False, ""
+        timed_out, fault, interrupted = False, "", False
         try:
             sim.run_until(sampler, timeout_s=timeout_s)
         except CoSimTimeout:
             timed_out = True
         except PlcFault as exc:
             fault = str(exc)
+        except KeyboardInterrupt:              # the drives' threads are stopped below, then the report
+            interrupted = True
         wall = time.perf_counter() - wall0
         sampler.close()
     finally:
@@ -450,6 +456,6 @@ def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s) -
     trace = sorted(plc_bus.records, key=lambda r: r.end_ns)
     res = RunResult(opts, nodes, plc.tick_ns, bit_ns, sampler.axes, trace, drives, scans=sim.scans,
                     wall_s=wall, timed_out=timed_out, fault=fault, overruns=sim.overruns,
-                    max_lateness_ns=sim.max_lateness_ns, before=before)
+                    max_lateness_ns=sim.max_lateness_ns, before=before, interrupted=interrupted)
     res.stats = bus_stats(trace, bit_ns, res.t_start_ns, max(res.t_end_ns, res.t_start_ns))
     return res
