@@ -187,19 +187,26 @@ def test_invalid_tx_frame_is_an_error():
         sim.step(1)
 
 
+REQUEST = Frame(0x601, bytes([0x40, 0x18, 0x10, 1, 0, 0, 0, 0]))
+
+
+def recording_plc(seen: list) -> FakePlc:
+    """A PLC with the library's mailbox that sends REQUEST once and records Rx with the echo flags."""
+    def program(plc):
+        if plc.scan_count == 0:
+            plc.tx(REQUEST)
+        seen.extend(plc.rx(with_echo=True))
+    return FakePlc(program, echo_fields=True)
+
+
 def test_echo_puts_the_plcs_frames_back_in_bus_order():
     """With the library's mailbox CoSim sets TxEcho and returns each sent frame once it ended on the bus,
     Echo TRUE, in bus order with the received ones; echo=False plays a driver without confirmations."""
-    req = Frame(0x601, bytes([0x40, 0x18, 0x10, 1, 0, 0, 0, 0]))
+    req = REQUEST
     for echo, expect in ((None, [(req, True), (Frame(0x581, req.data), False)]),
                          (False, [(Frame(0x581, req.data), False)])):
         seen = []
-
-        def program(plc):
-            if plc.scan_count == 0:
-                plc.tx(req)
-            seen.extend(plc.rx(with_echo=True))
-        plc = FakePlc(program, echo_fields=True)
+        plc = recording_plc(seen)
         bus = SimBus()
         bus.attach(EchoNode(), "drive", latency_ns=100_000)
         sim = CoSim(plc, bus, mailbox=MB, echo=echo)
@@ -217,14 +224,9 @@ def test_echo_needs_the_field():
 
 def test_real_time_echo_from_receive_own_messages():
     channel = f"linmot-st-test-{uuid.uuid4().hex}"
-    req = Frame(0x601, bytes([0x40, 0x18, 0x10, 1, 0, 0, 0, 0]))
+    req = REQUEST
     seen = []
-
-    def program(plc):
-        if plc.scan_count == 0:
-            plc.tx(req)
-        seen.extend(plc.rx(with_echo=True))
-    plc = FakePlc(program, echo_fields=True)
+    plc = recording_plc(seen)
     with open_bus(f"virtual:{channel}") as served, \
             open_bus(f"virtual:{channel}", receive_own_messages=True) as plc_bus:
         with NodeServer(EchoNode(), served):

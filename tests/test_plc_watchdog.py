@@ -76,6 +76,20 @@ def _cli(*args: str, **kw) -> subprocess.Popen:
                             stderr=subprocess.PIPE, text=True, env=env, **kw)
 
 
+def _interrupt(proc: subprocess.Popen, ready: str) -> tuple[str, str, float]:
+    """Wait for a stdout line starting with `ready`, send SIGINT; (stdout, stderr, seconds to exit)."""
+    try:
+        first = proc.stdout.readline()
+        assert first.startswith(ready), first + proc.stderr.read()
+        t0 = time.monotonic()
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=20)
+        return first + out, err, time.monotonic() - t0
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+
+
 def test_run_reports_the_watchdog_and_exits(tmp_path):
     src = write_st(SPIN, tmp_path)
     proc = _cli("run", str(src), "--backend", "builtin", "--cycles", "100", "--set", "INST0.GO=True",
@@ -92,16 +106,7 @@ def test_ctrl_c_stops_a_long_run_promptly_with_what_was_done(tmp_path):
                    check=True, capture_output=True)                # the build cached before the clock starts
     proc = _cli("run", str(src), "--backend", "builtin", "--cycles", str(10**12), "--watch", "INST0.N",
                 "--watch", "INST0.GO", "--every", "100000")
-    try:
-        first = proc.stdout.readline()                        # the first --every report: the run is on
-        assert first.startswith("scan 100000"), first + proc.stderr.read()
-        t0 = time.monotonic()
-        proc.send_signal(signal.SIGINT)
-        out, err = proc.communicate(timeout=20)
-        stopped_s = time.monotonic() - t0
-    finally:
-        if proc.poll() is None:
-            proc.kill()
+    out, err, stopped_s = _interrupt(proc, "scan 100000")     # the first --every report: the run is on
     assert proc.returncode == 130, err
     assert stopped_s < 2.0                                     # chunks of ~50 ms between two checks
     assert "linmot-st run: error: interrupted after" in err
@@ -111,16 +116,7 @@ def test_ctrl_c_stops_a_long_run_promptly_with_what_was_done(tmp_path):
 def test_ctrl_c_stops_the_emulator_with_what_it_served():
     import uuid
     proc = _cli("emulate", "--interface", "virtual", "--channel", f"wd-{uuid.uuid4().hex[:8]}", "--fast")
-    try:
-        first = proc.stdout.readline()
-        assert first.startswith("E1100 node 1 on virtual:"), first + proc.stderr.read()
-        t0 = time.monotonic()
-        proc.send_signal(signal.SIGINT)
-        out, err = proc.communicate(timeout=20)
-        stopped_s = time.monotonic() - t0
-    finally:
-        if proc.poll() is None:
-            proc.kill()
+    out, err, stopped_s = _interrupt(proc, "E1100 node 1 on virtual:")
     assert proc.returncode == 0, err
     assert stopped_s < 3.0
     assert "stopped in NMT state" in out and "frames received" in out

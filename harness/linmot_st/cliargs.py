@@ -76,26 +76,25 @@ def existing_file(what: str):
     return check
 
 
-def positive_seconds(text: str) -> float:
-    """An argparse type: a time in seconds, > 0."""
+def _seconds(text: str, allow_zero: bool) -> float:
     try:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r}: not a number of seconds") from None
-    if not value > 0 or value != value or value == float("inf"):
-        raise argparse.ArgumentTypeError(f"{text}: must be a positive number of seconds")
+    if value != value or value == float("inf") or value < 0 or (value == 0 and not allow_zero):
+        raise argparse.ArgumentTypeError(f"{text}: must be a number of seconds "
+                                         + (">= 0" if allow_zero else "> 0"))
     return value
+
+
+def positive_seconds(text: str) -> float:
+    """An argparse type: a time in seconds, > 0."""
+    return _seconds(text, allow_zero=False)
 
 
 def non_negative_seconds(text: str) -> float:
     """An argparse type: a time in seconds, >= 0 (0 = off)."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r}: not a number of seconds") from None
-    if not value >= 0 or value == float("inf"):
-        raise argparse.ArgumentTypeError(f"{text}: must be a number of seconds >= 0")
-    return value
+    return _seconds(text, allow_zero=True)
 
 
 def can_bitrate(text: str) -> int:

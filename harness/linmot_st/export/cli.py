@@ -43,13 +43,13 @@ def write_output(out: str, data: bytes) -> str:
         sys.stdout.buffer.write(data)
         sys.stdout.flush()
         return "<stdout>"
+    from ..cliargs import UsageError, check_output_file
     path = Path(out).expanduser()
-    if path.is_dir():
-        raise _WriteError(f"{out}: is a folder; give a file name")
+    try:
+        check_output_file(out, out)
+    except UsageError as exc:
+        raise _WriteError(str(exc)) from None
     folder = path.parent if str(path.parent) else Path(".")
-    if not folder.is_dir():
-        raise _WriteError(f"{out}: {folder} is not a folder" if folder.exists()
-                          else f"{out}: folder {folder} does not exist")
     try:
         fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=folder)
     except OSError as exc:
