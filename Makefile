@@ -1,4 +1,5 @@
-# The two commands of the README: `make demo` and `make test`. Both create .venv on first use.
+# The two commands of the README: `make demo` (commission two emulated drives from examples/two_axes.pvl, then
+# move them) and `make test`. Both create .venv on first use.
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
@@ -16,7 +17,7 @@ venv: $(STAMP)
 
 demo: $(STAMP)
 	mkdir -p build
-	$(BIN)/linmot-st commission examples/two_axes.pvl --axes 2 --report build/report
+	$(BIN)/linmot-st motion examples/two_axes.pvl --axes 2 --drive-timings real --report build/report
 
 test: $(STAMP)
 	$(BIN)/pytest -q -n 2

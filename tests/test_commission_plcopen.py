@@ -1,15 +1,20 @@
-"""PLCopen conformance of FB_LmCommission, with the checks of the st_lib suite (tests/test_stlib_plcopen.py:
-its helpers run_recording, outputs, assert_exclusive, requests) on plc_project's first axis: Execute is the
+"""PLCopen conformance of FB_LmCommission, with the checks of the st_lib suite (tests/st_lib/plcopen_checks.py:
+run_recording, outputs, assert_exclusive, requests) on plc_project's first axis: Execute is the
 program's Start (WaitBoot off), Abort its Abort, the options its LiveRam / Flash / Reset / Verify."""
 
 from __future__ import annotations
+
+import sys
+from pathlib import Path
 
 import pytest
 
 from linmot_st.commission.project import INSTANCE, MAILBOX
 from linmot_st.commission.testing import project_build
-from test_stlib_plcopen import (assert_exclusive, check_rising_edge_after_the_pulse, check_toggled_execute, outputs,
-                                requests, run_recording)
+
+sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
+from plcopen_checks import (assert_exclusive, check_rising_edge_after_the_pulse, check_toggled_execute,  # noqa: E402
+                            outputs, requests, run_recording)
 
 
 MS = 1_000_000

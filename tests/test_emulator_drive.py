@@ -351,7 +351,8 @@ def test_control_word_drives_the_state_machine_and_txpdo1():
     sw = struct.unpack("<H", [f for _, f in link.received if f.can_id == 0x181][-1].data[:2])[0]
     assert sw & 0x0001 and sw & 0x0002 and sw & 0x0004
     assert value_of(link.sdo(up(0x3D51, 1))) == sw                         # status word variable 1D51h
-    assert value_of(link.sdo(up(0x3B62, 1))) == 0x0800                     # state var: operation enabled
+    assert value_of(link.sdo(up(0x3B62, 1))) == 0x0840                     # state var: operation enabled, at
+    #                                                                        rest: in target position (bit 6)
 
 
 def test_setup_error_without_motor_and_error_register():

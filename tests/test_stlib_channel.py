@@ -396,7 +396,7 @@ def test_b1100_parameter_access_through_c0h():
 
 
 def test_reset_fb_no_longer_called_does_not_disable_heartbeat_monitoring():
-    """FB_LmReset sets Axis.Booting (heartbeat loss tolerated) at its turn; when it is no longer called, the
+    """FB_LmDriveReset sets Axis.Booting (heartbeat loss tolerated) at its turn; when it is no longer called, the
     channel evicts it and ends that grace too, so a lost node is detected again."""
     b = Bench(nodes=1)
     b.fb("RST").start()

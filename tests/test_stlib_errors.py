@@ -28,7 +28,7 @@ def test_numbers_and_names_unique():
     names = [e.name.upper() for e in errors.ERRORS]        # ST identifiers are case-insensitive
     assert len(names) == len(set(names))
     for e in errors.ERRORS:
-        assert 0 <= e.value <= 0xFFFF and e.value >> 8 in (0, 1, 2, 3, 4, 5, 6), e
+        assert 0 <= e.value <= 0xFFFF and e.value >> 8 in (0, 1, 2, 3, 4, 5, 6, 7), e
 
 
 def test_compiled_library_holds_the_same_numbers():
@@ -45,3 +45,18 @@ def test_describe():
     assert "06010002h attempt to write a read only object" in errors.describe(0x0302, 0x06010002)
     assert errors.name_of(0x04AB) == "ResultABh"
     assert errors.describe(0x7777).startswith("unknown")
+
+
+def test_drive_error_table_generates_the_st_constants():
+    """T_LmDriveErrors / F_LmDriveErrorText come from the drive's error table (emulator/data), which the emulator
+    answers its error texts from and takes its fatal codes from: one table for the drive and the library."""
+    from linmot_st.emulator import load_profile
+    from linmot_st.emulator.motion import words
+
+    text = errors.DRIVE_ST_FILE.read_text()
+    assert text == errors.render_drive_st()
+    for d in errors.DRIVE_ERRORS:
+        assert f"{d.name.ljust(1)}" in text and f"16#{d.code:04X}" in text
+    assert load_profile().error_texts == {d.code: d.text for d in errors.DRIVE_ERRORS}
+    assert words.FATAL_ERRORS == {d.code for d in errors.DRIVE_ERRORS if d.fatal}
+    assert {0x000B, 0x0062, 0x0080, 0x0081, 0x0086, 0x0089, 0x008A} <= set(errors.DRIVE_ERRORS_BY_CODE)

@@ -17,6 +17,7 @@ SUBCOMMAND_MODULES = [
     "linmot_st.emulator.cli",      # emulate
     "linmot_st.pvl.cli",           # pvl show, pvl to-st
     "linmot_st.commission.cli",    # commission
+    "linmot_st.motion.cli",        # motion
     "linmot_st.export.cli",        # export st, export plcopen
     "linmot_st.bench",             # bench
 ]

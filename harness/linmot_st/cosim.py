@@ -8,9 +8,9 @@ PLC time t:
   3. plc.step(1);
   4. Tx[1..TxCount] are sent in order, ready at t, and TxCount is set to 0 (a TxCount outside 0..32, or
      a Tx frame with Id > 16#7FF or Dlc > 8, raises CoSimError: no CAN driver could send it).
-With `echo` (the default) the mailbox's TxEcho is set and step 2 also puts each frame the PLC sent back
-into Rx once its transmission ended on the bus (Echo TRUE), in bus order with the received frames: the
-transmit confirmation of a PLC CAN driver (docs/plc-integration.md section 1).
+With `echo` (the default) the mailbox's TxEcho is set and step 2 also puts each SDO request the PLC sent
+(600h..67Fh) back into Rx once its transmission ended on the bus (Echo TRUE), in bus order with the
+received frames: the transmit confirmation of a PLC CAN driver (docs/plc-integration.md section 1).
 `RealTimeCoSim` does the same on a python-can bus against the wall clock (`linmot-st commission
 --bus virtual|socketcan:CHANNEL`): scan k starts at the wall time of the PLC's clock, and the frames
 received until then go into Rx.
@@ -27,6 +27,11 @@ from typing import Any, Callable
 from linmot_st.bus.frame import Frame
 
 MAILBOX_FRAMES = 32   # T_CanFrames : ARRAY[1..32] OF T_CanFrame
+
+
+def is_echoed(can_id: int) -> bool:
+    """The PLC's frames the mailbox confirms (TxEcho): its SDO requests, 600h + node."""
+    return 0x601 <= can_id <= 0x67F
 
 
 class CoSimError(Exception):
@@ -213,7 +218,8 @@ class CoSim:
     def _echoes(self) -> list[tuple[int, Frame]]:
         """The PLC's frames whose transmission ended since the previous scan, as (end time, frame)."""
         trace, i, name = self.bus.trace, self._trace_pos, self.name
-        out = [(e.end_ns, e.frame) for e in trace[i:] if e.sender == name and e.status != "error"]
+        out = [(e.end_ns, e.frame) for e in trace[i:]
+               if e.sender == name and e.status != "error" and is_echoed(e.frame.can_id)]
         self._trace_pos = len(trace)
         return out
 
@@ -269,7 +275,7 @@ class RealTimeCoSim:
             if msg.is_error_frame or msg.is_extended_id or getattr(msg, "is_fd", False):
                 continue
             own = not getattr(msg, "is_rx", True)
-            if own and not self.echo:
+            if own and not (self.echo and is_echoed(msg.arbitration_id)):
                 continue
             pending.append(Frame.from_message(msg))
             self._pending_echo.append(own)

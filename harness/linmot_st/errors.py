@@ -19,6 +19,13 @@ Scheme (ErrorID is a WORD; the high byte is the group):
            ErrorID = 16#0400 + rr, for every rr; the known codes are named below
   16#05xx  firmware compatibility (the seeds' table 5 rules)
   16#06xx  commissioning (FB_LmCommission): the dataset, the requested options, the read-back
+  16#07xx  motion (st_lib/motion): the axis state, the process data, the motion command handshake; 16#014x
+           invalid motion inputs
+
+The drive's own error codes (the logged error code of the MC software, [MC] chapter 10) are a separate table:
+`emulator/data/e1100_error_texts.csv` holds code, text, name and fatal flag once, and this module generates the
+ST constants `T_LmDriveErrors` and `F_LmDriveErrorText` (st_lib/motion/drive_errors.st) and the docs table from
+it (`DRIVE_ERRORS`).
 """
 
 from __future__ import annotations
@@ -114,10 +121,61 @@ ERRORS: tuple[ErrorDef, ...] = (
     ErrorDef("AboveMax", 0x0606, "pre-flight: the dataset's value (FailActual) is above the drive's maximum (FailExpected); nothing was written"),
     ErrorDef("BelowMin", 0x0607, "pre-flight: the dataset's value (FailActual) is below the drive's minimum (FailExpected); nothing was written"),
     ErrorDef("CurveMemory", 0x0608, "pre-flight: the curves need more bytes (FailActual) than the drive's curve memory (FailExpected, the CurveMemory input); nothing was written"),
+    # 0140..014F invalid motion input (before any frame is sent)
+    ErrorDef("InvalidVelocity", 0x0140, "motion: velocity zero, negative, or beyond what the command can carry"),
+    ErrorDef("InvalidAcceleration", 0x0141, "motion: acceleration zero, negative, or beyond what the command can carry"),
+    ErrorDef("InvalidDeceleration", 0x0142, "motion: deceleration zero, negative, or beyond what the command can carry"),
+    ErrorDef("PositionRange", 0x0143, "motion: position or distance beyond what the chosen command carries (16-bit: the 16-bit interface scaling; 32-bit: +-214.7 m)"),
+    ErrorDef("ScaleRange", 0x0144, "motion: curve time scale outside 0..200 % or amplitude scale outside -2000..2000 %"),
+    ErrorDef("InvalidCurveTime", 0x0145, "motion: curve time zero, negative or above 21474 s"),
+    ErrorDef("InvalidMode", 0x0146, "motion: the Mode or Command input names no known variant"),
+    # 07xx motion (st_lib/motion): the axis, the process data, the command handshake
+    ErrorDef("AxisNotEnabled", 0x0701, "the axis is not in Operation Enabled (state 8): power it with FB_LmPower first"),
+    ErrorDef("AxisNotHomed", 0x0702, "the move needs the axis homed (FB_LmHome, or a master homing)"),
+    ErrorDef("McNotRunning", 0x0703, "the drive's MC software is stopped (status word and state var 0): no motion"),
+    ErrorDef("NoProcessData", 0x0704, "no valid TxPDO from the drive: none since the enable or the drive's reset, or the last older than FB_LmPdo's PdoTimeout"),
+    ErrorDef("CommandTimeout", 0x0705, "the drive did not take the motion command (no count echo) within CommandTimeout, resends included"),
+    ErrorDef("DriveError", 0x0706, "the drive is in error (state 3, 4 or 14): its logged error code is on the DriveError output (T_LmDriveErrors)"),
+    ErrorDef("StopActive", 0x0707, "FB_LmStop holds the axis: no motion command until its Execute falls (MC_Stop)"),
+    ErrorDef("AxisEnabled", 0x0708, "the axis is enabled (state 5..17): this service stops the MC software; switch the axis off (FB_LmPower) first"),
+    ErrorDef("PowerTimeout", 0x0709, "FB_LmPower: the drive did not reach Operation Enabled within Timeout"),
+    ErrorDef("HomeTimeout", 0x070A, "FB_LmHome: homing did not finish within Timeout"),
+    ErrorDef("ResetTimeout", 0x070B, "FB_LmReset: the drive did not leave the error state within Timeout"),
+    ErrorDef("FatalError", 0x070C, "the drive's error is fatal (status word bit 12): only a reset or a power cycle clears it"),
+    ErrorDef("AxisBusy", 0x070D, "the axis is homing, in another special state or stopping (abort, freeze): it takes no motion command now"),
+    ErrorDef("CommandNotMapped", 0x070E, "the command needs more parameter bytes than the RxPDOs carry (FB_LmPdo Rx3Bytes; the drive's RxPDO3 mapping 2041h)"),
+    ErrorDef("PowerLost", 0x070F, "the axis left Operation Enabled while the FB was busy"),
 )
 
 BY_VALUE: dict[int, ErrorDef] = {e.value: e for e in ERRORS}
 BY_NAME: dict[str, ErrorDef] = {e.name: e for e in ERRORS}
+
+
+@dataclass(frozen=True)
+class DriveErrorDef:
+    name: str       # member name in T_LmDriveErrors
+    code: int       # the logged error code
+    text: str       # the drive's error text (8 stringlets)
+    fatal: bool
+
+
+def _load_drive_errors() -> tuple[DriveErrorDef, ...]:
+    import csv
+
+    path = Path(__file__).resolve().parent / "emulator" / "data" / "e1100_error_texts.csv"
+    with open(path, newline="", encoding="latin-1") as f:
+        rows = csv.DictReader(line for line in f if not line.startswith("#"))
+        return tuple(DriveErrorDef(r["name"], int(r["code"], 16), r["text"], r["fatal"] == "1") for r in rows)
+
+
+DRIVE_ERRORS: tuple[DriveErrorDef, ...] = _load_drive_errors()
+DRIVE_ERRORS_BY_CODE: dict[int, DriveErrorDef] = {d.code: d for d in DRIVE_ERRORS}
+
+
+def drive_error_text(code: int) -> str:
+    """The drive's text for a logged error code ('' when the table has none)."""
+    d = DRIVE_ERRORS_BY_CODE.get(code)
+    return d.text if d else ""
 
 # CiA 301 SDO abort codes (section 7.2.4.3.17), for AbortCode
 SDO_ABORTS: dict[int, str] = {
@@ -174,6 +232,10 @@ def name_of(error_id: int) -> str:
 
 REPO = Path(__file__).resolve().parents[2]
 ST_FILE = REPO / "st_lib" / "types" / "errors.st"
+DRIVE_ST_FILE = REPO / "st_lib" / "motion" / "drive_errors.st"
+DRIVE_DOC_FILE = REPO / "docs" / "motion.md"
+DRIVE_DOC_BEGIN = "<!-- drive-errors:begin (generated by python -m linmot_st.errors --write) -->"
+DRIVE_DOC_END = "<!-- drive-errors:end -->"
 DOC_FILE = REPO / "docs" / "st-library.md"
 DOC_BEGIN = "<!-- errors:begin (generated by python -m linmot_st.errors --write) -->"
 DOC_END = "<!-- errors:end -->"
@@ -186,7 +248,8 @@ def render_st() -> str:
         "   `python -m linmot_st.errors --write`: edit the Python table, not this file.",
         "   Every FB holds one instance `E : T_LmErrorIds` and reports `E.<Name>`; the members' initial",
         "   values are the numbers. Groups: 01xx invalid input, 02xx channel, 03xx transfer,",
-        "   04xx E1100 result code rr (16#0400 + rr), 05xx firmware compatibility, 06xx commissioning. *)",
+        "   04xx E1100 result code rr (16#0400 + rr), 05xx firmware compatibility, 06xx commissioning,",
+        "   07xx motion. *)",
         "TYPE",
         "  T_LmErrorIds : STRUCT",
     ]
@@ -195,6 +258,44 @@ def render_st() -> str:
         lines.append(f"    {e.name.ljust(width)} : WORD := 16#{e.value:04X};  (* {text} *)")
     lines += ["  END_STRUCT;", "END_TYPE", ""]
     return "\n".join(lines)
+
+
+def render_drive_st() -> str:
+    width = max(len(d.name) for d in DRIVE_ERRORS)
+    lines = [
+        "(* The drive's error codes (the logged error code of the MC software, [MC] chapter 10; the CANopen",
+        "   interface's C1h..DCh). GENERATED from harness/linmot_st/emulator/data/e1100_error_texts.csv by",
+        "   `python -m linmot_st.errors --write`: edit the table, not this file.",
+        "   Declare `DE : T_LmDriveErrors;` and compare: IF Err.AxisErrorID = DE.PosLagAlways THEN ...",
+        "   F_LmDriveErrorText gives the drive's text, F_LmDriveErrorFatal whether it can be acknowledged. *)",
+        "TYPE",
+        "  T_LmDriveErrors : STRUCT",
+    ]
+    for d in DRIVE_ERRORS:
+        lines.append(f"    {d.name.ljust(width)} : WORD := 16#{d.code:04X};  (* {d.text}{' (fatal)' if d.fatal else ''} *)")
+    lines += ["  END_STRUCT;", "END_TYPE", "",
+              "FUNCTION F_LmDriveErrorText : STRING",
+              "  (* the drive's text for a logged error code; '' for a code the table does not know *)",
+              "  VAR_INPUT", "    Code : WORD;", "  END_VAR",
+              "  CASE WORD_TO_UINT(Code) OF"]
+    for d in DRIVE_ERRORS:
+        lines.append(f"    {d.code}: F_LmDriveErrorText := '{d.text}';")
+    lines += ["  ELSE", "    F_LmDriveErrorText := '';", "  END_CASE;", "END_FUNCTION", "",
+              "FUNCTION F_LmDriveErrorFatal : BOOL",
+              "  (* TRUE for a code the table marks fatal (no acknowledge possible) *)",
+              "  VAR_INPUT", "    Code : WORD;", "  END_VAR",
+              "  CASE WORD_TO_UINT(Code) OF",
+              "    " + ", ".join(str(d.code) for d in DRIVE_ERRORS if d.fatal) + ":",
+              "      F_LmDriveErrorFatal := TRUE;",
+              "  ELSE", "    F_LmDriveErrorFatal := FALSE;", "  END_CASE;", "END_FUNCTION", ""]
+    return "\n".join(lines)
+
+
+def render_drive_doc_table() -> str:
+    rows = ["| code | T_LmDriveErrors member | the drive's text | fatal |", "|---|---|---|---|"]
+    for d in DRIVE_ERRORS:
+        rows.append(f"| {d.code:04X}h | `{d.name}` | {d.text} | {'yes' if d.fatal else ''} |")
+    return "\n".join([DRIVE_DOC_BEGIN, *rows, DRIVE_DOC_END])
 
 
 def render_doc_table() -> str:
@@ -212,32 +313,42 @@ def parse_st(text: str) -> dict[str, int]:
     return out
 
 
-def _doc_with_table(doc: str) -> str:
-    pattern = re.compile(re.escape(DOC_BEGIN) + ".*?" + re.escape(DOC_END), re.S)
+def _doc_with_table(doc: str, begin: str = DOC_BEGIN, end: str = DOC_END, render=render_doc_table,
+                    where: Path = DOC_FILE) -> str:
+    pattern = re.compile(re.escape(begin) + ".*?" + re.escape(end), re.S)
     if not pattern.search(doc):
-        raise ValueError(f"{DOC_FILE}: markers {DOC_BEGIN!r} .. {DOC_END!r} not found")
-    return pattern.sub(lambda _m: render_doc_table(), doc)
+        raise ValueError(f"{where}: markers {begin!r} .. {end!r} not found")
+    return pattern.sub(lambda _m: render(), doc)
+
+
+_DOCS = ((DOC_FILE, DOC_BEGIN, DOC_END, render_doc_table), (DRIVE_DOC_FILE, DRIVE_DOC_BEGIN, DRIVE_DOC_END,
+                                                             render_drive_doc_table))
 
 
 def check() -> list[str]:
-    """Differences between the table and the generated files (empty when in sync)."""
+    """Differences between the tables and the generated files (empty when in sync)."""
     problems = []
-    if not ST_FILE.exists() or ST_FILE.read_text() != render_st():
-        problems.append(f"{ST_FILE} differs from the table in {__name__}")
-    if DOC_FILE.exists():
-        doc = DOC_FILE.read_text()
-        try:
-            if _doc_with_table(doc) != doc:
-                problems.append(f"{DOC_FILE}: ErrorID table differs from the table in {__name__}")
-        except ValueError as exc:
-            problems.append(str(exc))
+    for path, render in ((ST_FILE, render_st), (DRIVE_ST_FILE, render_drive_st)):
+        if not path.exists() or path.read_text() != render():
+            problems.append(f"{path} differs from the table in {__name__}")
+    for path, begin, end, render in _DOCS:
+        if path.exists():
+            doc = path.read_text()
+            try:
+                if _doc_with_table(doc, begin, end, render, path) != doc:
+                    problems.append(f"{path}: the generated table differs from the table in {__name__}")
+            except ValueError as exc:
+                problems.append(str(exc))
     return problems
 
 
 def write() -> None:
     ST_FILE.write_text(render_st())
-    if DOC_FILE.exists():
-        DOC_FILE.write_text(_doc_with_table(DOC_FILE.read_text()))
+    DRIVE_ST_FILE.parent.mkdir(exist_ok=True)
+    DRIVE_ST_FILE.write_text(render_drive_st())
+    for path, begin, end, render in _DOCS:
+        if path.exists():
+            path.write_text(_doc_with_table(path.read_text(), begin, end, render, path))
 
 
 def main(argv: list[str] | None = None) -> int:

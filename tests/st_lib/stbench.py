@@ -44,21 +44,21 @@ TASK_LINE = "TASK Main(INTERVAL := T#1ms, PRIORITY := 0);"
 VARIANTS = REPO / "build" / "st_lib_variants"     # inside the repository: st_lib/ is its include root
 
 
-def testbench_with_task(task_ms: int) -> Path:
-    """The testbench with another task interval: its CONFIGURATION rewritten into a file under build/."""
-    text = TESTBENCH.read_text(encoding="latin-1")
+def testbench_with_task(task_ms: int, source: Path = TESTBENCH) -> Path:
+    """A testbench with another task interval: its CONFIGURATION rewritten into a file under build/."""
+    text = source.read_text(encoding="latin-1")
     assert text.count(TASK_LINE) == 1, "the testbench's task line changed: update TASK_LINE"
     VARIANTS.mkdir(parents=True, exist_ok=True)
-    path = VARIANTS / f"testbench_task{task_ms}ms.st"
+    path = VARIANTS / f"{source.stem}_task{task_ms}ms.st"
     tmp = path.with_suffix(f".{os.getpid()}.tmp")
     tmp.write_text(text.replace(TASK_LINE, TASK_LINE.replace("T#1ms", f"T#{task_ms}ms")), encoding="latin-1")
     os.replace(tmp, path)                          # atomic: parallel test workers may write it at once
     return path
 
 
-def bench_build(backend: str = "auto", task_ms: int = 1):
-    """The testbench, built once per backend (and task interval) per session (skips the test when it cannot
-    be built)."""
+def bench_build(backend: str = "auto", task_ms: int = 1, source: Path = TESTBENCH):
+    """A testbench (the library's, or another one such as the motion testbench), built once per backend (and
+    task interval) per session (skips the test when it cannot be built)."""
     from linmot_st import toolchain
     if backend == "auto":
         backend = os.environ.get("STLIB_BACKEND", "auto")      # run the suite on one backend: matiec | builtin
@@ -67,10 +67,10 @@ def bench_build(backend: str = "auto", task_ms: int = 1):
         if not backends:
             pytest.skip("no ST backend: MatIEC's iec2c not found and the builtin compiler is not importable")
         backend = backends[0]
-    key = backend if task_ms == 1 else f"{backend}/{task_ms}ms"
+    key = f"{source.name}/{backend}" if task_ms == 1 else f"{source.name}/{backend}/{task_ms}ms"
     if key not in _builds:
-        source = TESTBENCH if task_ms == 1 else testbench_with_task(task_ms)
-        _builds[key] = toolchain.build(str(source), backend=backend)
+        path = source if task_ms == 1 else testbench_with_task(task_ms, source)
+        _builds[key] = toolchain.build(str(path), backend=backend)
     return _builds[key]
 
 
@@ -99,7 +99,7 @@ class Fb:
     def __init__(self, bench: "Bench", name: str):
         self.bench = bench
         self.name = name.upper()
-        self.path = f"{PROG}.{self.name}"
+        self.path = f"{bench.prog}.{self.name}"
 
     def __getitem__(self, member: str) -> Any:
         return self.bench.plc[f"{self.path}.{member}"]
@@ -154,6 +154,9 @@ class Fb:
 class Bench:
     """The testbench PLC with `nodes` emulated E1100 drives (node IDs 1..nodes) on one simulated bus."""
 
+    source = TESTBENCH
+    prog = PROG
+
     def __init__(self, nodes: int = 1, *, bitrate: int = 500_000, timings: Any = None, backend: str = "auto",
                  enable: bool = True, drive_kwargs: dict | None = None, task_ms: int = 1,
                  echo: bool | None = None):
@@ -162,7 +165,7 @@ class Bench:
         from linmot_st.emulator import DriveTimings, E1100Drive
         from linmot_st.plc import Plc
 
-        self.build = bench_build(backend, task_ms)
+        self.build = bench_build(backend, task_ms, self.source)
         self.plc = Plc(self.build)
         self.bus = SimBus(bitrate)
         self.drives = {}
@@ -174,9 +177,9 @@ class Bench:
         self.sim = CoSim(self.plc, self.bus, mailbox=MAILBOX, echo=echo)   # echo None: TxEcho on
         if enable:
             for n in range(1, nodes + 1):
-                self.plc[f"{PROG}.CH{n}.NODEID"] = n
-                self.plc[f"{PROG}.CH{n}.ENABLE"] = True
-            self.sim.run_until(lambda: all(self.plc[f"{PROG}.AX{n}.BOOTCOUNT"] >= 1
+                self.plc[f"{self.prog}.CH{n}.NODEID"] = n
+                self.plc[f"{self.prog}.CH{n}.ENABLE"] = True
+            self.sim.run_until(lambda: all(self.plc[f"{self.prog}.AX{n}.BOOTCOUNT"] >= 1
                                            for n in range(1, nodes + 1)), max_scans=20_000)
             self.step(2)
 
@@ -191,10 +194,10 @@ class Bench:
         self.sim.step(n)
 
     def __getitem__(self, path: str) -> Any:
-        return self.plc[f"{PROG}.{path}"]
+        return self.plc[f"{self.prog}.{path}"]
 
     def __setitem__(self, path: str, value: Any) -> None:
-        self.plc[f"{PROG}.{path}"] = value
+        self.plc[f"{self.prog}.{path}"] = value
 
     def set_setpoints(self, values: list[int], var: str = "SP") -> None:
         self[var] = list(values) + [0] * (1000 - len(values))

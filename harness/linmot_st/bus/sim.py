@@ -44,11 +44,14 @@ class _Part:
     """A participant's state on the bus."""
 
     __slots__ = ("name", "node", "latency", "queue", "timer", "order", "tec", "bus_off", "sent", "discarded",
-                 "has_timer", "hold_until")
+                 "has_timer", "observe", "hold_until")
 
     def __init__(self, name: str, node: Any, latency: int, order: int) -> None:
         self.name, self.node, self.latency, self.order = name, node, latency, order
         self.has_timer = not isinstance(node, Endpoint)   # an endpoint never has a timer
+        # a node that computes ahead of the bus (the emulated drive) brings its inspectable state to the
+        # bus time after each run_until
+        self.observe = getattr(node, "observe", None)
         self.queue: list[tuple[int, int, Frame]] = []    # (ready_ns, seq, frame), sorted
         self.timer: int | None = None
         self.tec = 0
@@ -330,6 +333,9 @@ class SimBus:
             else:
                 self._arbitrate(t_next)
         self.now = t_end
+        for p in parts:
+            if p.observe is not None:
+                p.observe(t_end)
 
     def _fire_timer(self, part: _Part, t: int) -> None:
         self._queue_all(part, t, part.node.on_timer(t))

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from dataclasses import dataclass
 
 from ..cliargs import (UsageError, can_bitrate, check_output_file, check_output_folder, error, int_range,
                        positive_seconds)
@@ -31,22 +32,7 @@ def register(subparsers) -> None:
         "commission", help="commission emulated E1100 drives from a PVL file with the PLC, and report",
         description=__doc__.splitlines()[0], formatter_class=argparse.RawDescriptionHelpFormatter,
         epilog="docs/commissioning.md describes the phases, the report and every figure.")
-    p.add_argument("file", metavar="FILE.pvl", help="the PVL file (LinMot-Talk export)")
-    p.add_argument("--axes", type=int_range(1, 8), default=None, metavar="N",
-                   help="number of drives, 1..8 (default 1)")
-    p.add_argument("--node-ids", type=_node_ids, default=None, metavar="IDS",
-                   help="their CANopen node IDs, comma-separated (default 1..N)")
-    p.add_argument("--bus", default="sim", metavar="BUS",
-                   help="sim (default: simulated bus, virtual time), virtual[:CHANNEL] (python-can, real time), "
-                        "socketcan:CHANNEL, or INTERFACE:CHANNEL")
-    p.add_argument("--bitrate", type=can_bitrate, default=500_000, metavar="B",
-                   help="bit/s, a CANopen rate (default 500000)")
-    p.add_argument("--backend", choices=("auto", "matiec", "builtin"), default="auto",
-                   help="ST compiler (default auto: MatIEC where installed)")
-    p.add_argument("--trace", metavar="FILE", help="also write the CAN trace here (.log, .asc or .blf)")
-    p.add_argument("--trace-format", choices=("log", "asc", "blf"), default="log",
-                   help="format of the trace in the report folder (default log: candump)")
-    p.add_argument("--report", metavar="DIR", help="write the report folder (report.md, report.json, trace, plots)")
+    add_run_arguments(p, timings_default="default: real on the simulated bus, fast on real-time buses")
     p.add_argument("--live-ram", action=argparse.BooleanOptionalAction, default=False,
                    help="write RAM+ROM, ROM only where the drive refuses RAM (non-live parameters) (default off)")
     p.add_argument("--flash", action=argparse.BooleanOptionalAction, default=True,
@@ -57,20 +43,8 @@ def register(subparsers) -> None:
                         "a restart (default on)")
     p.add_argument("--verify", action=argparse.BooleanOptionalAction, default=True,
                    help="the PLC reads everything back (default on)")
-    p.add_argument("--preflight", action=argparse.BooleanOptionalAction, default=True,
-                   help="before the first write, the PLC asks each drive whether it has every UPID, may write it "
-                        "and takes its value, and whether the curves fit (default on)")
-    p.add_argument("--curve-memory", type=int_range(0), default=None, metavar="BYTES",
-                   help="the drives' curve memory for the pre-flight (70 + 4 x setpoints per curve); default: "
-                        "the emulated drives' (256 KiB), 0 (not checked) with --no-emulate")
-    p.add_argument("--drive-timings", choices=("real", "fast"), default=None,
-                   help="emulated drive durations (boot 4 s, MC start 3 s, ...) or short ones "
-                        "(default: real on the simulated bus, fast on real-time buses)")
-    p.add_argument("--timeout", type=positive_seconds, default=None, metavar="S",
-                   help="give up after S seconds of PLC time (default: from the dataset size)")
     p.add_argument("--no-emulate", dest="emulate", action="store_false",
                    help="real drives on a real bus: no emulated drives, no memory verification")
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=run_command)
 
 
@@ -102,7 +76,53 @@ def command_line(args: argparse.Namespace) -> str:
 DEFAULTS = {"bus": "sim", "bitrate": 500_000, "backend": "auto", "trace_format": "log"}
 
 
-def run_command(args: argparse.Namespace) -> int:
+@dataclass
+class Prepared:
+    """What a run needs once the arguments are checked and the project is built (commission, motion)."""
+    pvl: object
+    opts: object
+    dataset: object
+    project: object
+    build: object
+    build_s: float
+    rel: str
+
+
+def add_run_arguments(p, *, timings_default: str) -> None:
+    """The arguments `commission` and `motion` share."""
+    p.add_argument("file", metavar="FILE.pvl", help="the PVL file (LinMot-Talk export)")
+    p.add_argument("--axes", type=int_range(1, 8), default=None, metavar="N",
+                   help="number of drives, 1..8 (default 1)")
+    p.add_argument("--node-ids", type=_node_ids, default=None, metavar="IDS",
+                   help="their CANopen node IDs, comma-separated (default 1..N)")
+    p.add_argument("--bus", default="sim", metavar="BUS",
+                   help="sim (default: simulated bus, virtual time), virtual[:CHANNEL] (python-can, real time), "
+                        "socketcan:CHANNEL, or INTERFACE:CHANNEL")
+    p.add_argument("--bitrate", type=can_bitrate, default=500_000, metavar="B",
+                   help="bit/s, a CANopen rate (default 500000)")
+    p.add_argument("--backend", choices=("auto", "matiec", "builtin"), default="auto",
+                   help="ST compiler (default auto: MatIEC where installed)")
+    p.add_argument("--trace", metavar="FILE", help="also write the CAN trace here (.log, .asc or .blf)")
+    p.add_argument("--trace-format", choices=("log", "asc", "blf"), default="log",
+                   help="format of the trace in the report folder (default log: candump)")
+    p.add_argument("--report", metavar="DIR", help="write the report folder (report.md, report.json, trace, plots)")
+    p.add_argument("--drive-timings", choices=("real", "fast"), default=None,
+                   help=f"emulated drive durations (boot 4 s, MC start 3 s, ...) or short ones ({timings_default})")
+    p.add_argument("--timeout", type=positive_seconds, default=None, metavar="S",
+                   help="give up after S seconds of PLC time (default: from the dataset size)")
+    p.add_argument("--preflight", action=argparse.BooleanOptionalAction, default=True,
+                   help="before the first write, the PLC asks each drive whether it has every UPID, may write it "
+                        "and takes its value, and whether the curves fit (default on)")
+    p.add_argument("--curve-memory", type=int_range(0), default=None, metavar="BYTES",
+                   help="the drives' curve memory for the pre-flight (70 + 4 x setpoints per curve); default: "
+                        "the emulated drives' (256 KiB), 0 (not checked) with --no-emulate")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
+
+
+def prepare_run(args: argparse.Namespace, *, flash: bool = True, reset: bool = True, verify: bool = True,
+                live_ram: bool = False, emulate: bool = True, timings: str | None = None) -> Prepared | int:
+    """Read the PVL file, check the arguments (exit status 2 before anything is built), prepare and build the
+    project (1 when that fails)."""
     import time
     from pathlib import Path
 
@@ -110,11 +130,8 @@ def run_command(args: argparse.Namespace) -> int:
     from linmot_st.toolchain import CompileError
 
     from linmot_st.pvl.dataset import DatasetError, from_pvl
-    from .progress import Progress
     from .project import build_project, prepare
-    from .report import Context, Report
-    from .runner import RunOptions, check_bus_spec, run
-    from .verify import verify_run
+    from .runner import RunOptions, check_bus_spec
 
     err = sys.stderr
     # the output paths first: nothing is read, built or run for a command whose results cannot be kept
@@ -129,9 +146,9 @@ def run_command(args: argparse.Namespace) -> int:
     if args.node_ids and len(args.node_ids) != axes:
         raise UsageError(f"--axes {axes} but {len(args.node_ids)} node IDs")
     opts = RunOptions(axes=axes, node_ids=args.node_ids, bus=args.bus, bitrate=args.bitrate,
-                      live_ram=args.live_ram, flash=args.flash, reset=args.reset, verify=args.verify,
+                      live_ram=live_ram, flash=flash, reset=reset, verify=verify,
                       preflight=args.preflight, curve_memory=args.curve_memory,
-                      timings=args.drive_timings, timeout_s=args.timeout, emulate=args.emulate)
+                      timings=timings, timeout_s=args.timeout, emulate=emulate)
     try:
         opts.nodes()
         check_bus_spec(opts.bus)
@@ -156,45 +173,73 @@ def run_command(args: argparse.Namespace) -> int:
     except CompileError as e:
         print(e, file=err)
         return 1
-    build_s = time.perf_counter() - t0
-    rel = _rel(project.entry)
-    if not args.quiet:
-        print(f"built {rel} with {res.backend} ({'cached' if res.cached else f'{build_s:.1f} s'}); "
-              f"commissioning {axes} drive(s) on {'the simulated bus' if opts.simulated else opts.bus}", file=err)
-    progress = None if args.quiet else Progress(err)
-    try:
-        result = run(pvl, opts, res, dataset=dataset, progress=progress)
-    except (ValueError, OSError) as e:
-        error(args, str(e))
-        return 2
-    finally:
-        if progress:
-            progress.close()
-    verification = verify_run(pvl, result)
-    ctx = Context(pvl_path=args.file, command=command_line(args),
-                  backend=res.backend, build_s=build_s, build_cached=res.cached, project=rel,
-                  dataset_words=dataset.words)
-    report = Report(ctx, result, dataset, verification, pvl)
+    return Prepared(pvl, opts, dataset, project, res, time.perf_counter() - t0, _rel(project.entry))
+
+
+def commission_report(args: argparse.Namespace, prep: Prepared, result, command: str):
+    """The commissioning report of a run (printed first, written with the report folder by the caller)."""
+    from .report import Context, Report
+    from .verify import verify_run
+
+    verification = verify_run(prep.pvl, result)
+    ctx = Context(pvl_path=args.file, command=command, backend=prep.build.backend, build_s=prep.build_s,
+                  build_cached=prep.build.cached, project=prep.rel, dataset_words=prep.dataset.words)
+    report = Report(ctx, result, prep.dataset, verification, prep.pvl)
     report.compute()
-    sys.stdout.write(report.text())             # first: whatever happens to the files, the result is shown
-    sys.stdout.flush()
-    status = 0 if report.figures["result"]["passed"] else 130 if result.interrupted else 1
+    return report
+
+
+def write_outputs(args: argparse.Namespace, report, result) -> int:
+    """The --trace file and the report folder; 0, or 1 when one cannot be written."""
+    from pathlib import Path
+
+    err = sys.stderr
+    status = 0
     if args.trace:
         from linmot_st.bus.trace import write_trace
         try:
             write_trace(result.trace, args.trace)
         except (OSError, ValueError) as e:
             error(args, f"--trace {args.trace}: {getattr(e, 'strerror', None) or e}")
-            status = status or 1
+            status = 1
     if args.report:
         try:
             files = report.write(Path(args.report), args.trace_format)
         except OSError as e:
             error(args, f"--report {args.report}: {e.strerror or e} ({e.filename or args.report})")
-            return status or 1
+            return 1
         print(f"report: {args.report}/report.md, report.json, {files['trace']}, "
               f"{len(files['plots'])} curve plot(s)")
     return status
+
+
+def run_command(args: argparse.Namespace) -> int:
+    from .progress import Progress
+    from .runner import run
+
+    err = sys.stderr
+    prep = prepare_run(args, flash=args.flash, reset=args.reset, verify=args.verify, live_ram=args.live_ram,
+                       emulate=args.emulate, timings=args.drive_timings)
+    if isinstance(prep, int):
+        return prep
+    if not args.quiet:
+        print(f"built {prep.rel} with {prep.build.backend} "
+              f"({'cached' if prep.build.cached else f'{prep.build_s:.1f} s'}); commissioning {prep.opts.axes} "
+              f"drive(s) on {'the simulated bus' if prep.opts.simulated else prep.opts.bus}", file=err)
+    progress = None if args.quiet else Progress(err)
+    try:
+        result = run(prep.pvl, prep.opts, prep.build, dataset=prep.dataset, progress=progress)
+    except (ValueError, OSError) as e:
+        error(args, str(e))
+        return 2
+    finally:
+        if progress:
+            progress.close()
+    report = commission_report(args, prep, result, command_line(args))
+    sys.stdout.write(report.text())             # first: whatever happens to the files, the result is shown
+    sys.stdout.flush()
+    status = 0 if report.figures["result"]["passed"] else 130 if result.interrupted else 1
+    return write_outputs(args, report, result) or status
 
 
 def _rel(path) -> str:

@@ -48,6 +48,7 @@ def prepare(pvl, source_name: str | None = None) -> Project:
         f"{(source_name or 'a PVL file').replace('*)', '* )')} *)",
         '{#include "st_lib/linmot.st"}',
         f'{{#include "{rel}/dataset.st"}}',
+        '{#include "plc_project/motion.st"}',
         '{#include "plc_project/commission.st"}',
         '{#include "plc_project/config.st"}',
         "",

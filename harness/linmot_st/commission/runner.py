@@ -161,6 +161,7 @@ class RunResult:
     max_lateness_ns: int = 0
     stats: Any = None                          # BusStats over the commissioning span
     before: dict = field(default_factory=dict)  # node ID -> verify.drive_state() when switched on
+    after: Any = None                          # what run(after=...) returned (the motion job's result)
 
     @property
     def t_start_ns(self) -> int:
@@ -302,9 +303,12 @@ def make_drive(node_id: int, opts: RunOptions):
 def run(pvl, opts: RunOptions, build_result, *, dataset=None, progress=None,
         drive_factory: Callable[[int], Any] | None = None,
         prepare_bus: Callable[[Any, dict], None] | None = None,
-        prepare_plc: Callable[[Any], None] | None = None) -> RunResult:
+        prepare_plc: Callable[[Any], None] | None = None,
+        after: Callable[[Any, Any, dict], Any] | None = None) -> RunResult:
     """Commission with the PLC of `build_result` (plc_project with this PVL's dataset). `prepare_plc(plc)`
-    runs after the program's settings are written and before the first scan (tests: patch the dataset)."""
+    runs after the program's settings are written and before the first scan (tests: patch the dataset).
+    `after(plc, cosim, drives)` runs once every axis is commissioned, on the same PLC, bus and drives, before
+    they are shut down (the motion job: linmot_st.motion); its result is RunResult.after."""
     from linmot_st.plc import Plc
 
     from linmot_st.pvl.dataset import from_pvl
@@ -315,11 +319,11 @@ def run(pvl, opts: RunOptions, build_result, *, dataset=None, progress=None,
     plc = Plc(build_result)
     factory = drive_factory or (lambda n: make_drive(n, opts))
     if opts.simulated:
-        return _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, timeout_s)
-    return _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s)
+        return _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, timeout_s, after)
+    return _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s, after)
 
 
-def _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, timeout_s) -> RunResult:
+def _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, timeout_s, after) -> RunResult:
     from linmot_st.bus import SimBus
     from linmot_st.cosim import CoSim, CoSimTimeout
 
@@ -354,9 +358,11 @@ def _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, time
     wall = time.perf_counter() - wall0
     sampler.close()
     _collect(plc, sampler)
+    commissioned = all(a.done for a in sampler.axes) and not timed_out and not fault
+    after_result = after(plc, sim, drives) if after is not None and commissioned else None
     res = RunResult(opts, nodes, plc.tick_ns, bus.bit_ns, sampler.axes, list(bus.trace), drives,
                     scans=sim.scans, wall_s=wall, timed_out=timed_out, fault=fault, before=before,
-                    interrupted=interrupted)
+                    interrupted=interrupted, after=after_result)
     res.stats = bus.stats(res.t_start_ns, max(res.t_end_ns, res.t_start_ns))
     return res
 
@@ -386,7 +392,7 @@ class _RecordingBus:
         return msg
 
 
-def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s) -> RunResult:
+def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s, after) -> RunResult:
     import os
 
     from linmot_st.bus import open_bus
@@ -444,6 +450,8 @@ def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s) -
             interrupted = True
         wall = time.perf_counter() - wall0
         sampler.close()
+        commissioned = all(a.done for a in sampler.axes) and not timed_out and not fault
+        after_result = after(plc, sim, drives) if after is not None and commissioned else None
     finally:
         for d in drives.values():
             d.detach()
@@ -456,6 +464,7 @@ def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s) -
     trace = sorted(plc_bus.records, key=lambda r: r.end_ns)
     res = RunResult(opts, nodes, plc.tick_ns, bit_ns, sampler.axes, trace, drives, scans=sim.scans,
                     wall_s=wall, timed_out=timed_out, fault=fault, overruns=sim.overruns,
-                    max_lateness_ns=sim.max_lateness_ns, before=before, interrupted=interrupted)
+                    max_lateness_ns=sim.max_lateness_ns, before=before, interrupted=interrupted,
+                    after=after_result)
     res.stats = bus_stats(trace, bit_ns, res.t_start_ns, max(res.t_end_ns, res.t_start_ns))
     return res

@@ -21,7 +21,8 @@ from .comm import CommObjects
 from .curves import CurveStore
 from .errorlog import ErrorLog
 from .manufacturer import ManufacturerObjects, Reply
-from .mc import SETUP_ERROR, ERROR, MotionControl
+from .motion import MotionControl, MotionSettings, ProcessData
+from .motion.words import ERROR, SETUP_ERROR
 from .options import ProtocolOptions
 from .params import ParameterStore
 from .profile import DriveProfile, load_profile
@@ -80,11 +81,12 @@ class E1100Drive:
     protocol       ProtocolOptions: the alternatives where the sources leave the frame layout open (the
                    defaults are what the ST library implements; docs/emulator.md, "Protocol options")
     error_log      a prepared ErrorLog (kept over resets, like the drive's own)
+    motion         MotionSettings: the motion model's choices (MC cycle, axis dynamics, stroke, windows)
     """
 
     def __init__(self, node_id: int = 1, profile: DriveProfile | None = None, timings: DriveTimings | None = None,
                  *, protocol: ProtocolOptions | None = None, curve_capacity_bytes: int = 256 * 1024,
-                 error_log: ErrorLog | None = None):
+                 error_log: ErrorLog | None = None, motion: MotionSettings | None = None):
         if not 1 <= node_id <= 127:
             raise ValueError(f"CANopen node ID {node_id} is outside 1..127")
         self.node_id = node_id
@@ -95,7 +97,11 @@ class E1100Drive:
         self.curves = CurveStore(curve_capacity_bytes)
         self.ct = CommandTable()
         self.errlog = error_log or ErrorLog()
-        self.mc = MotionControl(self.timings.hw_test_ns)
+        self.motion = motion or MotionSettings()
+        self.mc = MotionControl(self.motion, self.timings.hw_test_ns, self.params, self.curves, self.ct,
+                                self._log_error)
+        self.params.live = self.mc.variable
+        self.pdo = ProcessData(self)
         self.mc_phase = "stopped"          # stopped | starting | running | stopping
         self.comm = CommObjects(node_id, self.profile.identity, self._heartbeat_power_on_ms,
                                 self._error_register, self._comm_changed)
@@ -112,8 +118,6 @@ class E1100Drive:
         self._sdo_busy = False
         self._flash_busy: str | None = None
         self._out: list[tuple[int, object]] = []
-        self._sync_count = [0, 0, 0]
-        self._tx_last: list[bytes | None] = [None, None, None]
         self._server = None
 
     # ------------------------------------------------------------------ node protocol
@@ -126,7 +130,8 @@ class E1100Drive:
         self.nmt_state = OFF
         self._drive_gen += 1
         self._comm_gen += 1
-        self.mc.stop()
+        self.mc.stop(self.now_ns)
+        self.pdo.stop()
         self.mc_phase = "stopped"
 
     def on_frame(self, frame, t_ns: int) -> list:
@@ -135,12 +140,15 @@ class E1100Drive:
             return []
         cid, data = frame.can_id, frame.data
         if cid == 0x000:
+            self.mc.sync(t_ns)
             self._nmt_command(data, t_ns)
         elif cid == 0x600 + self.node_id:
             if self.nmt_state != STOPPED and not self._sdo_busy:
+                self.mc.sync(t_ns)                       # the MC's variables as of now; a write may follow
                 self._sdo_request(bytes(data), t_ns)
-        elif self.nmt_state == OPERATIONAL:
-            self._process_data(cid, data, t_ns)
+        elif self.nmt_state == OPERATIONAL and self.pdo.handles(cid):
+            self.mc.observe(t_ns)                        # the MC's own inputs forget what it computed ahead
+            self.pdo.on_frame(cid, bytes(data), t_ns)
         return self._take(t_ns)
 
     def on_timer(self, t_ns: int) -> list:
@@ -151,17 +159,33 @@ class E1100Drive:
                 self.now_ns = max(self.now_ns, ev.t)
                 ev.fn(ev.t)
         mc_t = self.mc.next_timer_ns()
-        if mc_t is not None and mc_t <= t_ns and self.mc.on_timer(t_ns):
-            self._mc_changed(t_ns)
+        if mc_t is not None and mc_t <= t_ns:
+            self.mc.on_timer(t_ns)
+            self.pdo.publish(t_ns)
+        pdo_t = self.pdo.next_timer_ns()
+        if pdo_t is not None and pdo_t <= t_ns:
+            self.mc.observe(t_ns)
+            self.pdo.on_timer(t_ns)
         return self._take(t_ns)
+
+    def observe(self, t_ns: int) -> None:
+        """Bring the inspectable state (drive.mc) to t_ns: the bus and DirectLink call it after running."""
+        self.mc.observe(t_ns)
+
+    def inject_error(self, code: int, at_ns: int) -> None:
+        """Test hook: the MC detects error `code` at at_ns (e.g. a fatal 000Dh over current)."""
+        def fire(t: int) -> None:
+            self.mc.inject_error(code, t)
+            self.pdo.publish(t)
+        self._at(at_ns, fire)
 
     def next_timer_ns(self) -> int | None:
         while self._events and not self._live(self._events[0]):
             heapq.heappop(self._events)
         t = self._events[0].t if self._events else None
-        mc_t = self.mc.next_timer_ns()
-        if mc_t is not None and (t is None or mc_t < t):
-            t = mc_t
+        for other in (self.mc.next_timer_ns(self.pdo.cycle_sensitive), self.pdo.next_timer_ns()):
+            if other is not None and (t is None or other < t):
+                t = other
         return t
 
     # ------------------------------------------------------------------ inspection
@@ -199,7 +223,12 @@ class E1100Drive:
             raise RuntimeError("drive is already attached to a bus")
         server = NodeServer(self, bus, on_start=self.power_on, name=f"E1100 node {self.node_id}")
         self.lock = server.lock
+        self.mc.lookahead = False          # in real time every cycle runs when due: state is current to inspect
         self._server = server.start()
+
+    def clock_now_ns(self) -> int | None:
+        """While attached: the drive's time now (ns since it was attached); None in virtual time."""
+        return self._server.now_ns() if self._server is not None else None
 
     def detach(self) -> None:
         """Stop serving (joins the thread); re-raises an exception the drive raised meanwhile."""
@@ -209,6 +238,7 @@ class E1100Drive:
                 server.stop()
             finally:
                 self.lock = threading.RLock()
+                self.mc.lookahead = True
 
     # ------------------------------------------------------------------ internals: scheduling
     def _live(self, ev: _Event) -> bool:
@@ -236,7 +266,10 @@ class E1100Drive:
         self.nmt_state = BOOTING
         self._sdo_busy = False
         self._flash_busy = None
-        self.mc.stop()
+        self.mc.stop(t)
+        self.mc.power_on_reset()
+        self.pdo.stop()
+        self.pdo.reset_image()
         self.mc_phase = "stopped"
         self.params.load_ram_from_rom()
         self.curves.boot()
@@ -252,8 +285,7 @@ class E1100Drive:
 
     def _enter_pre_operational(self, t: int) -> None:
         self.nmt_state = PRE_OPERATIONAL
-        self._sync_count = [0, 0, 0]
-        self._tx_last = [None, None, None]
+        self.pdo.stop()
         self._send(t, 0x700 + self.node_id, b"\x00")        # boot-up message
         self._restart_heartbeat(t)
 
@@ -264,18 +296,20 @@ class E1100Drive:
         if cs == 0x01:
             if self.nmt_state != OPERATIONAL:
                 self.nmt_state = OPERATIONAL
-                self._tx_last = [None, None, None]
-                self._send_event_pdos(t + self.timings.pdo_latency_ns)
+                self.pdo.start(t)
         elif cs == 0x02:
             self.nmt_state = STOPPED
+            self.pdo.stop()
         elif cs == 0x80:
             self.nmt_state = PRE_OPERATIONAL
+            self.pdo.stop()
         elif cs == 0x81:
             self._start_boot(t)
         elif cs == 0x82:
             self._comm_gen += 1
             self._sdo_busy = False
             self.nmt_state = BOOTING
+            self.pdo.stop()
             self.sdo.reset()
             self.comm.reset()
             self._at(t + self.timings.reset_communication_ns, self._enter_pre_operational, comm=True)
@@ -346,7 +380,7 @@ class E1100Drive:
         self.mc_phase = "stopping"
 
         def stopped():
-            self.mc.stop()
+            self.mc.stop(self.now_ns)
             self.mc_phase = "stopped"
             self._mc_changed(self.now_ns)
         return Reply(delay_ns=self.timings.mc_stop_ns, then=stopped)
@@ -389,56 +423,15 @@ class E1100Drive:
 
     # ------------------------------------------------------------------ MC and PDOs
     def _mc_changed(self, t: int) -> None:
-        sw, sv, err, warn = self.mc.outputs()
-        p = self.params
-        for upid, v in ((0x1D51, sw), (0x1B62, sv), (0x1D96, err), (0x1D8E, warn), (0x1D52, self.mc.control_word)):
-            p.set_variable(upid, v)
-        if self.nmt_state == OPERATIONAL:
-            self._send_event_pdos(t + self.timings.pdo_latency_ns)
+        """The MC changed outside its own cycle (start, stop): event-driven TxPDOs follow."""
+        self.pdo.publish(t)
 
-    def _tpdo_payload(self, n: int) -> bytes | None:
-        if n == 0:
-            return struct.pack("<HHHH", *self.mc.outputs())
-        if n == 1:
-            return bytes(8)      # motion command status, actual position, current, demand position: no motion
-        return None              # TxPDO3: empty by default ([CO1100] p.18)
+    def _log_error(self, code: int, t: int) -> None:
+        self.errlog.log(code, self._operating_ms(t))
 
-    def _tpdo_cob(self, n: int) -> int | None:
-        cob = self.comm.value(0x1800 + n, 1)
-        return None if cob & 0x80000000 else cob & 0x7FF
+    def interface_error(self, code: int, t: int) -> None:
+        """An error of the CANopen interface (bad PDO mapping, spec 4.5): shown as the drive's error."""
+        self.mc.inject_error(code, t)
 
-    def _send_tpdo(self, n: int, t: int, only_if_changed: bool) -> None:
-        cob, payload = self._tpdo_cob(n), self._tpdo_payload(n)
-        if cob is None or payload is None:
-            return
-        if only_if_changed and payload == self._tx_last[n]:
-            return
-        self._tx_last[n] = payload
-        self._send(t, cob, payload)
-
-    def _send_event_pdos(self, t: int) -> None:
-        for n in range(3):
-            if self.comm.value(0x1800 + n, 2) >= 254:
-                self._send_tpdo(n, t, only_if_changed=True)
-
-    def _process_data(self, cid: int, data: bytes, t: int) -> None:
-        ready = t + self.timings.pdo_latency_ns
-        if cid == self.comm.value(0x1005) & 0x7FF:                 # SYNC
-            for n in range(3):
-                ttype = self.comm.value(0x1800 + n, 2)
-                if 1 <= ttype <= 240:
-                    self._sync_count[n] += 1
-                    if self._sync_count[n] >= ttype:
-                        self._sync_count[n] = 0
-                        self._send_tpdo(n, ready, only_if_changed=False)
-            return
-        for n in range(3):
-            cob = self.comm.value(0x1400 + n, 1)
-            if cob & 0x80000000 or cid != cob & 0x7FF:
-                continue
-            if n == 0 and len(data) >= 2:                           # RxPDO1: control word (1D52h)
-                if self.mc.set_control_word(data[0] | data[1] << 8, t):
-                    self._mc_changed(t)
-            if self.comm.value(0x1800 + n, 2) == 250:               # LinMot: TxPDO n answers RxPDO n
-                self._send_tpdo(n, ready, only_if_changed=False)
-            return
+    def send_pdo(self, t: int, cob: int, payload: bytes) -> None:
+        self._send(t + self.timings.pdo_latency_ns, cob, payload)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from bisect import bisect_left
 from dataclasses import dataclass
+from typing import Callable
 
 from .paramtypes import text_of, stringlets_of
 from .profile import ParamDef
@@ -62,8 +63,10 @@ class Parameter:
 class ParameterStore:
     def __init__(self, definitions: list[ParamDef]):
         self._p: dict[int, Parameter] = {d.upid: Parameter(d, d.default, d.default) for d in definitions}
+        self.by_upid = self._p                  # read-only view for the MC's per-cycle parameter reads
         self._order = sorted(self._p)
         self._strings = {d.upid: d for d in definitions if d.kind == "string"}
+        self.live: Callable[[int], int | None] | None = None   # the drive's variables now (the MC's provider)
 
     # ---- lookup ----
     def __getitem__(self, upid: int) -> Parameter:
@@ -121,6 +124,10 @@ class ParameterStore:
         p = self._value_param(upid)
         if what == "rom" and p.d.kind == "var":
             raise NoValueAccess(f"UPID {upid:04X}h is a variable: it has no ROM value")
+        if what == "ram" and p.d.kind == "var" and self.live is not None:
+            v = self.live(upid)
+            if v is not None:
+                return p.d.type.to_raw(v)
         value = {"ram": p.ram, "rom": p.rom, "min": p.d.min, "max": p.d.max, "default": p.d.default}[what]
         return p.d.type.to_raw(value)
 

@@ -1,0 +1,20 @@
+"""The motion half of the emulated E1100: the MC software's state machine, motion command interpreter,
+setpoint generation, the axis that follows it, the drive's PDOs, and the trajectory record
+(docs/emulator.md section 13).
+
+    from linmot_st.emulator import E1100Drive
+    from linmot_st.emulator.motion import MotionSettings
+    drive = E1100Drive(1, motion=MotionSettings(bandwidth_hz=40))
+    drive.mc.trajectory.samples        # what the axis did
+"""
+
+from .axis import Axis
+from .commands import COMMANDS, CommandDef, decode, encode
+from .control import MotionControl
+from .pdo import ProcessData
+from .settings import MotionSettings
+from .setpoints import CurvePlan, StopPlan, VaPlan
+from .trajectory import Sample, Trajectory
+
+__all__ = ["Axis", "COMMANDS", "CommandDef", "CurvePlan", "MotionControl", "MotionSettings", "ProcessData",
+           "Sample", "StopPlan", "Trajectory", "VaPlan", "decode", "encode"]

@@ -1,0 +1,57 @@
+"""MotionSettings: the choices of the motion model that no source fixes (docs/emulator.md, section 13).
+
+Units: positions in the drive's 0.1 um ("pu"), times in ns, frequencies in Hz. Every default is INFERRED
+unless its comment names a source; change them per drive: E1100Drive(1, motion=MotionSettings(...)).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+MS = 1_000_000
+MM = 10_000          # pu per millimetre
+
+
+@dataclass(frozen=True)
+class MotionSettings:
+    # MC cycle: setpoints are generated, the axis moves and the TxPDOs are checked for change once per cycle
+    cycle_ns: int = 1 * MS
+
+    # the axis: a position loop with velocity feedforward, a critically damped second-order follower of the
+    # demand (following error ~ acceleration / (2 pi f)^2 while accelerating, none at constant velocity)
+    bandwidth_hz: float = 25.0
+    damping: float = 1.0
+    acc_feedforward: float = 0.8        # 0..1: share of the demand acceleration fed forward
+    settle_pu: float = 0.5              # |error| and |velocity| x 1 ms below this: the axis is at rest
+    coast_decel_pu_s2: float = 50_000_000.0  # power stage off: friction and back-EMF slow the slider (5 m/s^2)
+
+    # the mechanics in the slider's own frame (pu): mechanical stops, and where the slider is at power-on
+    stop_negative_pu: int = 0
+    stop_positive_pu: int = 300 * MM          # 300 mm stroke
+    start_position_pu: int = 20 * MM          # 20 mm from the negative stop
+
+    # in target position (status word bit 10): setpoint generation finished and |target - actual| <= window
+    # for at least the hold time
+    in_target_window_pu: int = 1000     # 0.1 mm
+    in_target_hold_ns: int = 0
+
+    # homing on a mechanical stop: the stop is found when the following error exceeds this
+    homing_stop_error_pu: int = 5000    # 0.5 mm
+
+    # motion commands (other than NOP, control word, live parameter, master homing and stops) need the axis
+    # homed, else error 0080h ([MC] 10: "action that requires the motor to be already homed")
+    motion_requires_homing: bool = True
+
+    # demand current (1B93h, mA) = moving mass x actual acceleration / force constant
+    moving_mass_kg: float = 0.5
+    force_constant_n_per_a: float = 10.0
+
+    # the trajectory record (drive.mc.trajectory): one sample per MC cycle and per event
+    record_trajectory: bool = True
+
+    # run quiet cycles (plain motion) in a tight loop and ahead of the bus: a speed-up with the same results
+    # (tests/test_motion_equivalence.py); False runs every cycle through the generic path
+    quiet_cycles: bool = True
+
+    def with_(self, **changes) -> "MotionSettings":
+        return replace(self, **changes)

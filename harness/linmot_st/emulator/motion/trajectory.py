@@ -1,0 +1,65 @@
+"""The trajectory record of one drive: what the axis did, for assertions and plots.
+
+One sample per MC cycle while anything moves, and one at each event (a command, a state change), so a
+standing axis costs nothing. Positions in pu (0.1 um), velocities in pu/s.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import NamedTuple
+
+
+class Sample(NamedTuple):
+    t_ns: int
+    demand: float
+    actual: float
+    demand_velocity: float
+    actual_velocity: float
+    state_var: int
+    status_word: int
+
+    @property
+    def state(self) -> int:
+        return self.state_var >> 8
+
+    @property
+    def following_error(self) -> float:
+        return self.demand - self.actual
+
+
+@dataclass
+class Trajectory:
+    samples: list[Sample]
+
+    def __init__(self) -> None:
+        self.samples = []
+
+    def add(self, sample: Sample) -> None:
+        s = self.samples
+        if s and s[-1].t_ns == sample.t_ns:
+            s[-1] = sample          # an event and a cycle at the same instant: keep the later state
+        else:
+            s.append(sample)
+
+    def clear(self) -> None:
+        self.samples.clear()
+
+    def __len__(self) -> int:
+        return len(self.samples)
+
+    def between(self, t0_ns: int, t1_ns: int | None = None) -> list[Sample]:
+        return [s for s in self.samples if s.t_ns >= t0_ns and (t1_ns is None or s.t_ns <= t1_ns)]
+
+    def at(self, t_ns: int) -> Sample | None:
+        """The last sample at or before t_ns."""
+        found = None
+        for s in self.samples:
+            if s.t_ns > t_ns:
+                break
+            found = s
+        return found
+
+    def columns(self) -> dict[str, list]:
+        """The samples as columns (for plots and numpy)."""
+        return {name: [getattr(s, name) for s in self.samples] for name in Sample._fields}

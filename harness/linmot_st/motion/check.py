@@ -1,0 +1,112 @@
+"""Did every axis do what the motion job asked? Each step checked against the emulated drive's trajectory
+record and the bus trace, with the expectations of plan.py (the PVL as written):
+
+- move, ct: at the end of the step the actual position is within POSITION_TOLERANCE_MM of the target;
+- curve: from the moment the drive took the curve command (its record of executed commands; on the simulated
+  bus that is the end of the command's RxPDO3, tests/test_motion_job.py checks it) over the curve time, the demand position follows the curve as written within CURVE_DEMAND_TOLERANCE_MM and the actual
+  position within CURVE_ACTUAL_TOLERANCE_MM (the following error);
+- home: the drive is homed; power: Operation Enabled; off: switched off; setup, stop: done.
+"""
+
+from __future__ import annotations
+
+import struct
+from dataclasses import dataclass, field
+
+from linmot_st.emulator.motion import commands as C
+
+from .plan import (CURVE_ACTUAL_TOLERANCE_MM, CURVE_DEMAND_TOLERANCE_MM, MM, POSITION_TOLERANCE_MM, Plan)
+
+
+@dataclass
+class StepCheck:
+    axis: int
+    index: int
+    kind: str
+    ok: bool
+    what: str                               # the check in words, with the figures
+    reached_mm: float | None = None
+    demand_dev_mm: float | None = None
+    actual_dev_mm: float | None = None
+    t_exec_ns: int | None = None            # curve: when the drive took the command
+
+
+@dataclass
+class MotionCheck:
+    steps: list[StepCheck] = field(default_factory=list)
+
+    @property
+    def passed(self) -> bool:
+        return bool(self.steps) and all(s.ok for s in self.steps)
+
+
+def curve_start(drive, curve_id: int, t0_ns: int, t1_ns: int) -> int | None:
+    """When the drive executed a 040xh command for `curve_id` in [t0, t1] (the drive's clock)."""
+    for t, header, params in drive.mc.executed:
+        if t0_ns <= t <= t1_ns and C.command_id(header) == C.TIME_CURVE \
+                and struct.unpack_from("<H", params)[0] == curve_id:
+            return t
+    return None
+
+
+def check_motion(result, plan: Plan, drives: dict) -> MotionCheck:
+    """In a real-time run each drive has its own clock (result.clock_offsets, within result.clock_margin_ns):
+    a state is then checked anywhere within the margin of the step's end."""
+    out = MotionCheck()
+    margin = result.clock_margin_ns
+    for ax in result.axes:
+        drive = drives.get(ax.node_id)
+        off = result.clock_offsets.get(ax.node_id, 0)
+        if ax.error or not ax.done:
+            out.steps.append(StepCheck(ax.axis, ax.fail_step, "job", False,
+                                       f"the motion program stopped at step {ax.fail_step}"
+                                       if ax.error else "the motion program did not finish"))
+        for rec in ax.steps:
+            step = plan.steps[rec.index - 1]
+            if drive is None:                     # a real drive: only what the PLC saw
+                out.steps.append(StepCheck(ax.axis, rec.index, rec.kind, rec.ok, "done by the PLC"))
+                continue
+            traj = drive.mc.trajectory
+            end = traj.at(rec.t1_ns + off)
+            around = [end] + traj.between(rec.t1_ns + off - margin, rec.t1_ns + off + margin) if margin else [end]
+            if not rec.ok:
+                out.steps.append(StepCheck(ax.axis, rec.index, rec.kind, False, f"failed: ErrorID 16#{rec.error_id:04X}"
+                                           + (f", drive error {rec.drive_error:04X}h" if rec.drive_error else "")))
+                continue
+            if step.kind in ("move", "ct"):
+                reached = end.actual / MM
+                ok = abs(reached - step.target_mm) <= POSITION_TOLERANCE_MM
+                out.steps.append(StepCheck(ax.axis, rec.index, step.kind, ok,
+                                           f"at {reached:.3f} mm, target {step.target_mm:g} mm "
+                                           f"(tolerance {POSITION_TOLERANCE_MM} mm)", reached_mm=reached))
+            elif step.kind == "curve":
+                out.steps.append(_check_curve(ax, rec, step, drive, off))
+            elif step.kind == "home":
+                ok = any(s.status_word & 0x0800 for s in around)
+                out.steps.append(StepCheck(ax.axis, rec.index, "home", ok, "homed" if ok else "not homed"))
+            elif step.kind == "power":
+                s = next((s for s in around if s.state >= 8), end)
+                out.steps.append(StepCheck(ax.axis, rec.index, "power", s.state >= 8, f"state {s.state}"))
+            elif step.kind == "off":
+                s = next((s for s in around if s.state < 8), end)
+                out.steps.append(StepCheck(ax.axis, rec.index, "off", s.state < 8, f"state {s.state}"))
+            else:
+                out.steps.append(StepCheck(ax.axis, rec.index, step.kind, True, "done"))
+    return out
+
+
+def _check_curve(ax, rec, step, drive, off: int) -> StepCheck:
+    run = step.curve
+    t_exec = curve_start(drive, step.curve_id, rec.t0_ns + off - 5_000_000, rec.t1_ns + off + 5_000_000)
+    if t_exec is None:
+        return StepCheck(ax.axis, rec.index, "curve", False, "the drive executed no 040xh command for this curve")
+    samples = drive.mc.trajectory.between(t_exec, t_exec + run.duration_ns)
+    if not samples:
+        return StepCheck(ax.axis, rec.index, "curve", False, "no trajectory samples over the curve time")
+    dem = max(abs(s.demand - run.position(s.t_ns - t_exec)) for s in samples) / MM
+    act = max(abs(s.actual - run.position(s.t_ns - t_exec)) for s in samples) / MM
+    ok = dem <= CURVE_DEMAND_TOLERANCE_MM and act <= CURVE_ACTUAL_TOLERANCE_MM
+    return StepCheck(ax.axis, rec.index, "curve", ok,
+                     f"demand within {dem:.4f} mm of the curve as written (tolerance {CURVE_DEMAND_TOLERANCE_MM}), "
+                     f"actual within {act:.3f} mm (tolerance {CURVE_ACTUAL_TOLERANCE_MM}), {len(samples)} samples",
+                     demand_dev_mm=dem, actual_dev_mm=act, t_exec_ns=t_exec - off)

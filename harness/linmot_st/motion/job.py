@@ -1,0 +1,159 @@
+"""Running the motion job: commissioning (linmot_st.commission.runner), then, on the same PLC, bus and drives,
+plc_project's motion steps on every axis (plc_project/motion.st), sampled scan by scan.
+
+    from linmot_st.motion.job import run_job
+    result = run_job(pvl, RunOptions(axes=2, timings="fast"), build_result, plan(pvl))
+    result.commission            # the commissioning RunResult (its .after is the MotionResult)
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+from linmot_st.commission.project import INSTANCE
+from linmot_st.commission.runner import RunOptions, RunResult, run
+
+from .plan import MAX_STEPS, Plan
+
+
+@dataclass
+class StepRecord:
+    index: int                  # 1-based, as StepNo
+    kind: str
+    label: str
+    t0_ns: int
+    scan0: int
+    t1_ns: int = 0
+    scan1: int = 0
+    ok: bool = False
+    error_id: int = 0
+    drive_error: int = 0
+
+    @property
+    def scans(self) -> int:
+        return self.scan1 - self.scan0
+
+    @property
+    def duration_ns(self) -> int:
+        return self.t1_ns - self.t0_ns
+
+
+@dataclass
+class AxisMotion:
+    axis: int
+    node_id: int
+    steps: list[StepRecord] = field(default_factory=list)
+    done: bool = False
+    error: bool = False
+    error_id: int = 0
+    drive_error: int = 0
+    fail_step: int = 0
+
+
+@dataclass
+class MotionResult:
+    plan: Plan
+    axes: list[AxisMotion]
+    t0_ns: int
+    t1_ns: int = 0
+    scans: int = 0
+    wall_s: float = 0.0
+    timed_out: bool = False
+    clock_offsets: dict = field(default_factory=dict)   # node -> drive time - PLC time (real time; 0 on sim)
+    clock_margin_ns: int = 0                            # how far that offset may be off (real time)
+
+    @property
+    def finished(self) -> bool:
+        return all(a.done for a in self.axes) and not self.timed_out
+
+
+class MotionSampler:
+    """Reads each axis' StepNo and end flags after every scan; records step boundaries; tells progress."""
+
+    def __init__(self, plc, node_ids: list[int], plan: Plan, progress=None):
+        self.plc, self.plan, self.progress = plc, plan, progress
+        self.axes = [AxisMotion(k + 1, n) for k, n in enumerate(node_ids)]
+        v = plc.var
+        self._vars = [dict(step=v(f"{INSTANCE}.A{k}.MOT.STEPNO"), done=v(f"{INSTANCE}.A{k}.MOT.DONE"),
+                           error=v(f"{INSTANCE}.A{k}.MOT.ERROR"))
+                      for k in range(1, len(node_ids) + 1)]
+        self.scans = 0
+
+    def __call__(self) -> bool:
+        plc = self.plc
+        if self.scans:
+            t = plc.time_ns            # the end of the scan that just ran
+            for ax, vs in zip(self.axes, self._vars):
+                if ax.done or ax.error:
+                    continue
+                k = vs["step"].value
+                cur = ax.steps[-1] if ax.steps else None
+                if k >= 1 and (cur is None or cur.index != k) and k <= len(self.plan.steps):
+                    if cur is not None:
+                        cur.t1_ns, cur.scan1, cur.ok = t - plc.tick_ns, self.scans - 1, True
+                        if self.progress:
+                            self.progress.step_done(ax, cur)
+                    s = self.plan.steps[k - 1]
+                    ax.steps.append(StepRecord(k, s.kind, s.label, t - plc.tick_ns, self.scans - 1))
+                if vs["done"].value or vs["error"].value:
+                    cur = ax.steps[-1] if ax.steps else None
+                    ax.done, ax.error = bool(vs["done"].value), bool(vs["error"].value)
+                    if cur is not None and not cur.t1_ns:
+                        cur.t1_ns, cur.scan1, cur.ok = t, self.scans, ax.done
+                        if self.progress:
+                            self.progress.step_done(ax, cur)
+        self.scans += 1
+        return all(a.done or a.error for a in self.axes)
+
+
+def _write_steps(plc, plan: Plan) -> None:
+    values = [s.plc_value() for s in plan.steps]
+    blank = {"KIND": "PLC_STEP_NONE", "POSITION": 0.0, "VELOCITY": 0.0, "ACCELERATION": 0.0, "CURVEID": 0,
+             "ENTRY": 0}
+    plc[f"{INSTANCE}.STEPS"] = values + [blank] * (MAX_STEPS - len(values))
+    plc[f"{INSTANCE}.NSTEPS"] = len(values)
+
+
+def motion_phase(plan: Plan, timeout_s: float, progress=None):
+    """The `after` hook of the commissioning runner: runs the steps on every commissioned axis."""
+
+    def after(plc, sim, drives) -> MotionResult:
+        from linmot_st.cosim import CoSimTimeout
+
+        nodes = list(drives) or list(range(1, plc[f"{INSTANCE}.AXES"] + 1))
+        _write_steps(plc, plan)
+        plc[f"{INSTANCE}.RUNMOTION"] = True
+        sampler = MotionSampler(plc, nodes, plan, progress)
+        result = MotionResult(plan, sampler.axes, plc.time_ns)
+        for n, d in drives.items():
+            now = d.clock_now_ns()
+            if now is not None:
+                # real time: the PLC's clock and each drive's clock count from different starts; the PLC is
+                # within a scan of the wall clock here, the frames a few hundred us in transit
+                result.clock_offsets[n] = now - plc.time_ns
+                result.clock_margin_ns = 5 * plc.tick_ns
+        wall0 = time.perf_counter()
+        try:
+            sim.run_until(sampler, max_scans=int(timeout_s * 1e9 // plc.tick_ns))
+        except CoSimTimeout:
+            result.timed_out = True
+        result.wall_s = time.perf_counter() - wall0
+        result.t1_ns, result.scans = plc.time_ns, sampler.scans
+        for ax in sampler.axes:
+            m = plc[f"{INSTANCE}.A{ax.axis}.MOT"]
+            ax.error_id, ax.drive_error, ax.fail_step = m["ERRORID"], m["DRIVEERROR"], m["FAILSTEP"]
+            if ax.error and ax.steps:
+                ax.steps[-1].ok = False
+                ax.steps[-1].error_id, ax.steps[-1].drive_error = ax.error_id, ax.drive_error
+        return result
+
+    return after
+
+
+def run_job(pvl, opts: RunOptions, build_result, plan: Plan, *, dataset=None, progress=None,
+            motion_progress=None, timeout_s: float = 60.0, **kw) -> RunResult:
+    """Commission, then move: the commissioning RunResult with the MotionResult in .after (None when the
+    commissioning failed)."""
+    return run(pvl, opts, build_result, dataset=dataset, progress=progress,
+               after=motion_phase(plan, timeout_s, motion_progress), **kw)

@@ -1,0 +1,143 @@
+"""The steps of the motion job, from a PVL file: what plc_project's motion program (plc_project/motion.st)
+runs on every commissioned axis, and what each step must achieve (docs/motion.md, "The motion job").
+
+    set up the PDOs -> power -> home -> move to a position -> for each time curve: move to its start, run
+    it -> start a command-table entry -> stop -> switch off
+
+The expectations are computed here from the PVL file (the curves as written, the command table's targets),
+not taken from the emulated drive.
+"""
+
+from __future__ import annotations
+
+import struct
+from dataclasses import dataclass, field
+
+from linmot_st.emulator.motion import commands as C
+
+MM = 10_000                     # 0.1 um per mm
+MAX_STEPS = 24                  # T_PlcSteps
+MOVE_VELOCITY = 500.0           # mm/s
+MOVE_ACCELERATION = 5000.0      # mm/s^2 (and deceleration)
+STOP_DECELERATION = 5000.0
+POSITION_TOLERANCE_MM = 0.1     # the emulated drive's in-target window
+CURVE_DEMAND_TOLERANCE_MM = 0.001
+CURVE_ACTUAL_TOLERANCE_MM = 0.5
+
+STEP_KINDS = {"setup": "PLC_STEP_SETUP", "power": "PLC_STEP_POWER", "home": "PLC_STEP_HOME",
+              "move": "PLC_STEP_MOVE", "curve": "PLC_STEP_CURVE", "ct": "PLC_STEP_CT", "stop": "PLC_STEP_STOP",
+              "off": "PLC_STEP_OFF"}
+
+
+@dataclass
+class CurveRun:
+    """A commissioned time curve as the drive runs it with its default parameters (040xh)."""
+    curve_id: int
+    name: str
+    setpoints: list[int]
+    duration_ns: int
+    offset: float                   # pu
+    amplitude: float                # factor
+
+    def position(self, t_ns: int) -> float:
+        """The curve as written at t_ns after its start (pu): N setpoints over the curve time, linear between."""
+        y = self.setpoints
+        if t_ns >= self.duration_ns:
+            return self.offset + self.amplitude * y[-1]
+        x = max(t_ns, 0) / self.duration_ns * (len(y) - 1)
+        i = int(x)
+        return self.offset + self.amplitude * (y[i] + (x - i) * (y[i + 1] - y[i]))
+
+
+@dataclass
+class Step:
+    kind: str
+    label: str
+    position_mm: float = 0.0
+    velocity: float = 0.0
+    acceleration: float = 0.0
+    curve_id: int = 0
+    entry: int = 0
+    target_mm: float | None = None          # where the axis must be at the end of the step
+    curve: CurveRun | None = None
+    chain: list[int] = field(default_factory=list)   # CT: the entries the sequence runs
+
+    def plc_value(self) -> dict:
+        return {"KIND": STEP_KINDS[self.kind], "POSITION": self.position_mm, "VELOCITY": self.velocity,
+                "ACCELERATION": self.acceleration, "CURVEID": self.curve_id, "ENTRY": self.entry}
+
+
+@dataclass
+class Plan:
+    steps: list[Step]
+    not_run: list[str]                      # what the PVL holds that the job does not run, and why
+
+
+def _param(pvl, upid: int, default: int) -> int:
+    layer = pvl.layer(2)
+    p = layer.get(upid) if layer is not None else None
+    return default if p is None else p.signed_value
+
+
+def _ct_chain(pvl, entry: int, scale_pos: int) -> tuple[list[int], float | None]:
+    """The entries a sequence from `entry` runs and the position its last absolute move goes to (pu); None
+    when the chain holds something else than absolute VAI moves and waits, or loops."""
+    entries = {e.entry_id: e.block for e in pvl.command_table}
+    chain, target, k = [], None, entry
+    while k != 0xFFFF:
+        if k in chain or k not in entries or len(chain) > 32:
+            return chain, None
+        chain.append(k)
+        b = entries[k]
+        cid, params = C.command_id(b.motion_header), b.parameters
+        if cid in (C.VAI_GO_TO_POS, C.PREDEF_VAI_GO_TO_POS):
+            target = struct.unpack_from("<i", params, 0)[0]
+        elif cid == C.VAI16_GO_TO_POS:
+            target = struct.unpack_from("<h", params, 0)[0] * scale_pos
+        elif cid not in (C.NOP, C.WAIT_TIME, C.WAIT_MOTION_FINISHED, C.WAIT_IN_TARGET_POSITION):
+            return chain, None
+        k = b.linked_entry
+    return chain, target
+
+
+def plan(pvl, position_mm: float = 50.0) -> Plan:
+    steps = [Step("setup", "set up the PDOs (TxPDO1 event timer 50 ms)"), Step("power", "power (MC_Power)"),
+             Step("home", "home (MC_Home)")]
+    not_run: list[str] = []
+    move = dict(velocity=MOVE_VELOCITY, acceleration=MOVE_ACCELERATION)
+    steps.append(Step("move", f"move to {position_mm:g} mm", position_mm=position_mm, target_mm=position_mm,
+                      **move))
+    offset = _param(pvl, 0x14D0, 0)
+    time_scale = _param(pvl, 0x14D1, 10000)
+    amplitude = _param(pvl, 0x14D2, 1000) / 1000.0
+    for c in pvl.curves:
+        info = c.info
+        if info.object_type != 0x0003:
+            not_run.append(f"curve {c.curve_id} {info.name}: object type {info.object_type:04X}h (a cam profile) "
+                           "needs a master encoder, which the emulated drive does not simulate")
+            continue
+        run = CurveRun(c.curve_id, info.name, list(c.setpoints), info.x_length * 10_000 * time_scale // 10000,
+                       offset, amplitude)
+        start, end = run.position(0) / MM, run.position(run.duration_ns) / MM
+        steps.append(Step("move", f"move to the start of curve {c.curve_id} ({start:g} mm)", position_mm=start,
+                          target_mm=start, **move))
+        steps.append(Step("curve", f"run curve {c.curve_id} {info.name} (040xh)", curve_id=c.curve_id,
+                          target_mm=end, curve=run))
+    scale_pos = _param(pvl, 0x14C0, 1000)
+    for e in sorted(pvl.command_table, key=lambda e: e.entry_id):
+        chain, target = _ct_chain(pvl, e.entry_id, scale_pos)
+        if target is not None:
+            steps.append(Step("ct", f"start command-table entry {e.entry_id} {e.block.name} "
+                                    f"(runs {', '.join(map(str, chain))})", entry=e.entry_id,
+                              target_mm=target / MM, chain=chain))
+            break
+    else:
+        if pvl.command_table:
+            not_run.append("command table: no entry whose sequence is absolute VAI moves and waits only")
+    steps += [Step("stop", "stop (MC_Stop)", acceleration=STOP_DECELERATION), Step("off", "switch off")]
+    if len(steps) > MAX_STEPS:
+        dropped = steps[MAX_STEPS - 2:-2]
+        steps = steps[:MAX_STEPS - 2] + steps[-2:]
+        not_run.append(f"{len(dropped)} step(s) beyond the {MAX_STEPS} plc_project holds: "
+                       + "; ".join(s.label for s in dropped))
+    return Plan(steps, not_run)

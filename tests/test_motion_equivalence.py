@@ -1,0 +1,85 @@
+"""Quiet cycles (plain motion run in a tight loop, and ahead of the bus where no event-driven TxPDO needs every
+cycle) change nothing: the same frames at the same times, and the same trajectory, as every MC cycle run one by
+one through the generic path (MotionSettings(quiet_cycles=False))."""
+
+from __future__ import annotations
+
+import struct
+
+import pytest
+
+from linmot_st.bus import Frame, SimBus
+from linmot_st.bus.nodes import ScriptedNode
+from linmot_st.emulator import DriveTimings, E1100Drive, load_profile
+from linmot_st.emulator.motion import MotionSettings
+from linmot_st.emulator.motion import commands as C
+
+MS = 1_000_000
+MM = 10_000
+
+
+def _cmd(cid: int, count: int, **fields) -> list[Frame]:
+    raw = C.encode(cid, count, **fields).ljust(10, b"\0")
+    return [Frame(0x301, raw[:8]), Frame(0x401, raw[:2] + raw[8:10])]
+
+
+def _script(sync: bool) -> list[tuple[int, Frame]]:
+    cw = lambda w: Frame(0x201, struct.pack("<H", w))                               # noqa: E731
+    sdo_read = lambda upid: Frame(0x601, struct.pack("<BHB4x", 0x40, 0x2000 + upid, 1))   # noqa: E731
+    s: list[tuple[int, Frame]] = []
+    if sync:
+        s.append((50 * MS, Frame(0x601, struct.pack("<BHBBxxx", 0x2F, 0x1801, 2, 1))))   # TxPDO2 on SYNC
+    s += [(60 * MS, Frame(0x000, b"\x01\x01")), (61 * MS, cw(0x003E)), (70 * MS, cw(0x003F)),
+          (120 * MS, cw(0x083F)), (150 * MS, cw(0x003F))]
+    t = 200 * MS
+    s += [(t, f) for f in _cmd(C.VAI16_GO_TO_POS, 1, target=800, vmax=1000, acc=100, dec=50)]
+    s += [(t + 37 * MS + 300_000, sdo_read(0x1B8D)), (t + 90 * MS, sdo_read(0x1BAF))]
+    s += [(t + 120 * MS, f) for f in _cmd(C.VAI16_GO_TO_POS, 2, target=100, vmax=700, acc=80, dec=80)]  # re-target
+    s += [(t + 700 * MS, cw(0x002F)), (t + 760 * MS, cw(0x003F))]                     # abort and back
+    s += [(t + 800 * MS, f) for f in _cmd(C.VAI16_GO_TO_POS, 3, target=1200, vmax=1500, acc=200, dec=200)]
+    s += [(t + 850 * MS, cw(0x001F)), (t + 900 * MS, cw(0x003F))]                     # freeze and resume
+    s += [(t + 1500 * MS, f) for f in _cmd(C.VAI_STOP, 4, dec=100000)]
+    s += [(t + 1600 * MS, f) for f in _cmd(C.VAI16_GO_TO_POS, 5, target=2900, vmax=1000, acc=100, dec=100)]
+    if sync:
+        s += [(k * 4 * MS, Frame(0x080, b"")) for k in range(15, 900)]
+    return sorted(s, key=lambda x: x[0])
+
+
+def _run(quiet: bool, sync: bool, hold_ns: int):
+    profile = load_profile().with_defaults({0x1194: 2, 0x1600: 250 * MM, 0x1601: -10 * MM})
+    drive = E1100Drive(1, profile, timings=DriveTimings.fast(),
+                       motion=MotionSettings(quiet_cycles=quiet, in_target_hold_ns=hold_ns))
+    generic = []                               # the cycles that ran through the generic path
+    original = drive.mc._cycle
+
+    def counted(t: int) -> None:
+        generic.append(t)
+        original(t)
+    drive.mc._cycle = counted
+    bus = SimBus(1_000_000)
+    bus.attach(drive, "drive")
+    bus.attach(ScriptedNode(_script(sync)), "master")
+    drive.power_on(0)
+    for k in range(1, 40):                     # observed now and then, as a test would (no effect on either)
+        bus.run_until(k * 100 * MS)
+    trace = [(e.start_ns, e.frame.can_id, bytes(e.frame.data)) for e in bus.trace]
+    drive.generic_cycles = len(generic)
+    return trace, list(drive.mc.trajectory.samples), drive
+
+
+@pytest.mark.parametrize("sync, hold_ns", [(False, 0), (True, 0), (True, 5 * MS)])
+def test_quiet_cycles_give_the_same_frames_and_trajectory(sync, hold_ns):
+    ref_trace, ref_samples, ref = _run(False, sync, hold_ns)
+    trace, samples, drive = _run(True, sync, hold_ns)
+    assert drive.mc.error_code == 0x0008                                   # the last move runs into the limit
+    assert len(trace) == len(ref_trace) and trace == ref_trace
+    assert len(samples) == len(ref_samples) and samples == ref_samples
+    assert drive.errlog.entries == ref.errlog.entries
+
+
+def test_quiet_cycles_are_used():
+    """The speed-up is real: most cycles of the run are quiet (the rest: where an output word changes)."""
+    _, samples, ref = _run(False, True, 0)
+    _, _, drive = _run(True, True, 0)
+    assert ref.generic_cycles > 900                                        # every cycle, one by one
+    assert drive.generic_cycles < ref.generic_cycles / 10

@@ -1,0 +1,121 @@
+"""The motion job (`linmot-st motion`): plc_project commissions emulated drives from the example PVL file and
+then moves them through its motion program; every step is checked against the PVL as written."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from linmot_st.cli import main
+from linmot_st.commission.project import build_project, prepare
+from linmot_st.commission.runner import RunOptions
+from linmot_st.emulator.motion import commands as C
+from linmot_st.motion.check import check_motion
+from linmot_st.motion.job import run_job
+from linmot_st.motion.plan import CURVE_DEMAND_TOLERANCE_MM, plan
+from linmot_st.pvl import load_pvl
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "two_axes.pvl"
+MS = 1_000_000
+
+
+@pytest.fixture(scope="module")
+def pvl():
+    return load_pvl(EXAMPLE)
+
+
+@pytest.fixture(scope="module")
+def build(pvl):
+    return build_project(prepare(pvl, EXAMPLE.name))
+
+
+def test_plan_from_the_example(pvl):
+    p = plan(pvl, 40.0)
+    assert [s.kind for s in p.steps] == ["setup", "power", "home", "move", "move", "curve", "move", "curve", "ct",
+                                         "stop", "off"]
+    assert p.steps[3].target_mm == 40.0
+    curves = [s for s in p.steps if s.kind == "curve"]
+    assert [s.curve_id for s in curves] == [23, 1]
+    # MinJerk_100mm_400ms as written: 400 setpoints over 400 ms, 0 .. 100 mm
+    run = curves[1].curve
+    assert run.duration_ns == 400 * MS and run.position(0) == 0 and run.position(400 * MS) == 100 * 10_000
+    assert run.position(200 * MS) == pytest.approx(50 * 10_000, abs=1500)
+    ct = next(s for s in p.steps if s.kind == "ct")
+    assert ct.entry == 1 and ct.chain == [1, 2] and ct.target_mm == 0.0         # Go_Out, linked Go_Home
+    assert any("Sine_Cam_5mm" in x and "master encoder" in x for x in p.not_run)
+
+
+def test_job_on_two_axes_checks_every_step(pvl, build):
+    p = plan(pvl)
+    res = run_job(pvl, RunOptions(axes=2, timings="fast"), build, p)
+    m = res.after
+    assert m is not None and m.finished
+    chk = check_motion(m, p, res.drives)
+    assert chk.passed, [s.what for s in chk.steps if not s.ok]
+    assert len(chk.steps) == 2 * len(p.steps)
+    for s in chk.steps:
+        if s.kind == "curve":
+            assert s.demand_dev_mm <= CURVE_DEMAND_TOLERANCE_MM and s.actual_dev_mm < 0.3
+            # the drive's own record of when it took the command is the end of that command's RxPDO3 on the bus
+            node = s.axis
+            frames = [e for e in res.trace if e.frame.can_id == 0x400 + node and e.end_ns == s.t_exec_ns]
+            assert frames and C.command_id(int.from_bytes(frames[0].frame.data[:2], "little")) == C.TIME_CURVE
+    # the PLC's steps came one after the other, the curve steps took at least their curve time
+    for ax in m.axes:
+        assert [r.index for r in ax.steps] == list(range(1, len(p.steps) + 1))
+        for r in ax.steps:
+            step = p.steps[r.index - 1]
+            if step.kind == "curve":
+                assert r.duration_ns >= step.curve.duration_ns
+
+
+def test_an_axis_that_cannot_follow_fails_the_job(pvl, build):
+    p = plan(pvl)
+
+    def block_axis_1(bus, drives):
+        def block(t):
+            drives[1].mc.block(True, t)
+        bus.call_at(12_000 * MS, block)              # in the motion program (after the commissioning)
+
+    res = run_job(pvl, RunOptions(axes=2, timings="real"), build, p, prepare_bus=block_axis_1)
+    m = res.after
+    assert m is not None
+    ax1, ax2 = m.axes
+    assert ax1.error and ax1.drive_error in (0x000B, 0x000C) and ax2.done
+    chk = check_motion(m, p, res.drives)
+    assert not chk.passed
+    assert all(s.ok for s in chk.steps if s.axis == 2)
+
+
+def test_motion_command_writes_the_reports(tmp_path, capsys):
+    report = tmp_path / "report"
+    rc = main(["motion", str(EXAMPLE), "--axes", "2", "--report", str(report), "--position", "30"])
+    out = capsys.readouterr()
+    assert rc == 0, out.out[-2000:]
+    assert "result: PASSED (2 axes commissioned and verified)" in out.out
+    assert "motion job: PASSED" in out.out and "not run: curve 2 Sine_Cam_5mm" in out.out
+    assert "axis 1: step 3 home (MC_Home)" in out.err
+    fig = json.loads((report / "motion.json").read_text())
+    assert fig["passed"] and len(fig["rows"]) == 22 and all(r["ok"] for r in fig["rows"])
+    assert fig["rows"][3]["label"] == "move to 30 mm"
+    for name in ("report.md", "report.json", "can.log", "motion.md", "motion-axis1.png", "motion-axis2.png"):
+        assert (report / name).exists(), name
+    assert (report / "motion-axis2.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert out.out.splitlines()[0].startswith(f"linmot-st motion {EXAMPLE} --axes 2")
+
+
+def test_motion_command_refuses_bad_arguments(capsys):
+    with pytest.raises(SystemExit) as exit_:                   # argparse's check, in the commands' one style
+        main(["motion", str(EXAMPLE), "--axes", "9"])
+    assert exit_.value.code == 2
+    assert "linmot-st motion: error: argument --axes: 9: must be 1..8" in capsys.readouterr().err
+
+
+def test_motion_job_on_python_can_virtual_bus(tmp_path, capsys):
+    """Real time: the drive served by a NodeServer thread, the PLC by RealTimeCoSim; each has its own clock."""
+    rc = main(["motion", str(EXAMPLE), "--axes", "1", "--bus", "virtual", "-q"])
+    out = capsys.readouterr().out
+    assert rc == 0, out[-2000:]
+    assert "motion job: PASSED" in out
