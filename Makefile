@@ -16,6 +16,7 @@ $(STAMP): pyproject.toml
 venv: $(STAMP)
 
 demo: $(STAMP)
+	mkdir -p build
 	$(BIN)/linmot-st motion examples/two_axes.pvl --axes 2 --drive-timings real --report build/report
 
 test: $(STAMP)

@@ -12,7 +12,7 @@ import pytest
 
 from linmot_st.bus.bits import bus_bits, unstuffed_bus_bits
 from linmot_st.cli import main
-from linmot_st.pvl.dataset import INFO_WORDS
+from linmot_st.pvl.dataset import INFO_WORDS, PREFLIGHT_EXCHANGES
 from linmot_st.commission.testing import EXAMPLE, commission, example
 
 
@@ -20,8 +20,8 @@ from linmot_st.toolchain.testing import BACKEND_PARAMS  # noqa: E402
 
 PVL = example()
 CURVE_EXCHANGES = 1 + sum(1 + INFO_WORDS + len(c.setpoints) for c in PVL.curves)   # 41h, then 50h, 54h x 18, 53h x N
-EXPECTED = {"check": 3 * 2, "params": 30, "curves": CURVE_EXCHANGES, "ct": 1 + 33 * 3,
-            "verify": 30 + (CURVE_EXCHANGES - 1) + 33 * 3}
+EXPECTED = {"check": 3 * 2, "preflight": PREFLIGHT_EXCHANGES * 30, "params": 30, "curves": CURVE_EXCHANGES,
+            "ct": 1 + 33 * 3, "verify": 30 + (CURVE_EXCHANGES - 1) + 33 * 3}
 
 
 TRANSFER = sum(EXPECTED.values())                    # one axis' exchanges in CHECK, PARAMS, CURVES, CT, VERIFY
@@ -45,7 +45,7 @@ def test_one_axis(backend):
     assert ax.done and not ax.error and ax.error_id == 0
     assert o.verification.ok, o.report.text()
     phases = {p.phase: p for p in ax.phases}
-    assert list(phases) == ["start", "check", "params", "curves", "ct", "flash", "verify"]
+    assert list(phases) == ["start", "check", "preflight", "params", "curves", "ct", "flash", "verify"]
     for name, n in EXPECTED.items():
         assert phases[name].exchanges == n, name
     # each exchange takes one scan: the answer is checked and the next request sent in the same scan,
@@ -54,6 +54,8 @@ def test_one_axis(backend):
         assert phases[name].scans == phases[name].exchanges, name
     assert phases["verify"].scans == phases["verify"].exchanges + 1
     assert (phases["start"].scans, phases["start"].exchanges) == (2, 0)
+    # the pre-flight reads one curve record per scan (no exchange) and goes back to the first row
+    assert phases["preflight"].scans == phases["preflight"].exchanges + len(PVL.curves) + 1
     # the bus carried exactly the FB's requests, each answered
     assert len(requests(o.result, 1)) == ax.exchanges
     assert sum(1 for e in o.result.trace if e.frame.can_id == 0x581) == ax.exchanges
@@ -158,12 +160,19 @@ def test_reset_then_verify_reads_what_survives_the_restart():
     o = commission(axes=1, reset=True)
     ax = o.axis(1)
     assert ax.done and o.verification.ok, o.report.text()
-    assert [p.phase for p in ax.phases] == ["start", "check", "params", "curves", "ct", "flash", "reset", "verify"]
+    assert [p.phase for p in ax.phases] == ["start", "check", "preflight", "params", "curves", "ct", "flash", "reset",
+                                            "verify"]
     drive = o.result.drives[1]
     assert drive.nmt_state == "OPERATIONAL"
     ram = next(c for c in o.verification.for_node(1) if c.what == "parameters RAM")
     assert ram.required and ram.equal == 30                         # after the reset RAM = ROM everywhere
     assert sum(1 for e in o.result.trace if e.frame.can_id == 0x701 and e.frame.data == b"\x00") == 2
+    # back only once it said Operational: 0Bh, then 1017h read (0: no heartbeat), set to 10 ms, set back
+    reset = next(p for p in ax.phases if p.phase == "reset")
+    assert reset.exchanges == 4 and drive.comm.value(0x1017) == 0
+    beats = [e for e in o.result.trace if e.frame.can_id == 0x701 and reset.t0_ns <= e.start_ns < reset.t1_ns
+             and e.frame.data != b"\x00"]
+    assert beats and beats[-1].frame.data == b"\x05"              # the heartbeat that ended the check
 
 
 def test_the_demo_command(tmp_path, capsys):
@@ -184,8 +193,8 @@ def test_the_demo_command(tmp_path, capsys):
                            [f"curve_{c}.png" for c in (1, 2, 23)])
     fig = json.loads((report / "report.json").read_text())
     assert fig["result"] == {"commissioned": True, "verified": True, "passed": True}
-    assert [p["phase"] for p in fig["axes"][0]["phases"]] == ["start", "check", "params", "curves", "ct", "flash",
-                                                             "reset", "verify"]
+    assert [p["phase"] for p in fig["axes"][0]["phases"]] == ["start", "check", "preflight", "params", "curves", "ct",
+                                                             "flash", "reset", "verify"]
     assert fig["axes"][1]["exchanges"] == fig["axes"][1]["exchanges_on_bus"]
     need = 2 * (TRANSFER + FLASH_NECESSARY + 1)                       # + the reset request
     assert fig["run"]["necessary_exchanges"] == need
@@ -210,7 +219,7 @@ def test_progress_on_a_terminal_and_in_a_log():
     commission(axes=2, verify=False, progress=Progress(log, tty=False))
     assert "\r\x1b[2K" in tty.getvalue() and "node 2: curves [" in tty.getvalue()     # the redrawn status line
     lines = log.getvalue().splitlines()
-    assert "\r" not in log.getvalue() and len(lines) == 2 * 6                          # 5 phases + the end, per axis
+    assert "\r" not in log.getvalue() and len(lines) == 2 * 7                          # 6 phases + the end, per axis
     assert lines[0].endswith("node 1   compatibility check done: 2 layers, 6 exchanges, 6 scans")
     assert lines[-1].endswith("node 2   commissioned")
 

@@ -88,11 +88,32 @@ def test_a_mismatching_layer_writes_nothing(name, error_id, tree, dataset_mc_ver
     assert node1.done == (dataset_mc_version is None)               # a drive that matches is commissioned
 
 
-def test_a_refused_parameter_stops_at_that_upid():
+def refusing_friction():
     profile = load_profile()
     friction = next(d for d in profile.parameters if d.upid == 0x13A5)
-    profile = profile.with_parameters([dataclasses.replace(friction, max=50)])   # the PVL writes 100
+    return friction, profile.with_parameters([dataclasses.replace(friction, max=50)])   # the PVL writes 100
+
+
+def test_the_pre_flight_refuses_a_value_beyond_the_drives_maximum_and_writes_nothing():
+    _friction, profile = refusing_friction()
     o = commission(axes=1, drive_factory=fast_drive(profile))
+    ax = o.axis(1)
+    assert ax.error and ax.error_id == 0x0606
+    assert (ax.fail_phase, ax.fail_kind, ax.fail_item) == ("preflight", "param", 0x13A5)
+    assert (ax.fail_expected, ax.fail_actual) == (50, 100)
+    assert all(e.frame.data[3] == 0x20 for e in downloads(o.result, 1))     # the UPID list starts only
+    untouched(o.result.drives[1])
+    text = o.report.text()
+    assert ("Failed in phase pre-flight check, UPID 13A5h Motion Control SW\\Position Controller\\Control "
+            "Parameter Set A\\FF Friction: ErrorID 16#0606 pre-flight: the dataset's value (FailActual) is above "
+            "the drive's maximum (FailExpected); nothing was written (the dataset's value 00000064h, the drive's "
+            "maximum 00000032h)") in text
+    assert [c.what for c in o.verification.for_node(1)] == ["drive unchanged"] and o.verification.node_ok(1)
+
+
+def test_without_pre_flight_a_refused_parameter_stops_at_that_upid():
+    friction, profile = refusing_friction()
+    o = commission(axes=1, drive_factory=fast_drive(profile), preflight=False)
     ax = o.axis(1)
     assert ax.error and (ax.error_id, ax.abort_code) == (0x0302, 0x06090030)
     assert (ax.fail_phase, ax.fail_kind, ax.fail_item) == ("params", "param", 0x13A5)
@@ -117,19 +138,20 @@ def test_a_refused_parameter_stops_at_that_upid():
 def test_answers_lost_in_the_middle_of_a_curve():
     seen = {"n": 0}
 
-    def after_100(frame) -> bool:                                   # the drive's 101st answer and all later ones
+    def after_220(frame) -> bool:                                   # the drive's 221st answer and all later ones
         if frame.can_id != 0x581:
             return False
         seen["n"] += 1
-        return seen["n"] > 100
+        return seen["n"] > 220
 
-    o = commission(axes=1, prepare_bus=lambda bus, drives: bus.drop(after_100))
+    o = commission(axes=1, prepare_bus=lambda bus, drives: bus.drop(after_220))
     ax = o.axis(1)
-    # answers 1..6 layers, 7..36 parameters, 37 delete all curves, 38..66 curve 23 (50h, 18 info, 10 points),
-    # 67 curve 1's 50h, 68..85 its info block: answer 101 is the one to setpoint 15 of curve 1
+    # answers 1..6 layers, 7..126 pre-flight, 127..156 parameters, 157 delete all curves, 158..186 curve 23
+    # (50h, 18 info, 10 points), 187 curve 1's 50h, 188..205 its info block: answer 221 is the one to
+    # setpoint 15 of curve 1
     assert ax.error and ax.error_id == 0x0301
     assert (ax.fail_phase, ax.fail_kind, ax.fail_item, ax.fail_step) == ("curves", "curve", 1, 19 + 15)
-    assert ax.exchanges == 101
+    assert ax.exchanges == 221
     curves = next(p for p in ax.phases if p.phase == "curves")
     assert curves.t1_ns - curves.t0_ns >= 1_000_000_000             # the channel's SDO timeout (1 s)
     text = o.report.text()
@@ -146,7 +168,7 @@ def test_a_read_back_that_differs_is_reported_with_both_values():
         plc[f"{DS}[{word_of_param(0x13A5)}]"] = 0x00010064         # the drive keeps 16 bits: 0064h reads back
         plc[f"{DS}[{word_of_param(0x1005)}]"] = 0xFFFF05DC         # same 16 bits, sign fill: equal as kept
 
-    o = commission(axes=1, prepare_plc=patch)
+    o = commission(axes=1, prepare_plc=patch, preflight=False)      # the pre-flight would refuse 00010064h
     ax = o.axis(1)
     assert ax.error and ax.error_id == 0x0603
     # 1005h (checked before 13A5h) matched: the drive keeps 16 bits, FFFF05DCh and 000005DCh are the same value
@@ -164,10 +186,10 @@ def test_a_drive_that_changed_although_the_check_failed_is_compared_in_full():
     drive = E1100Drive(1)
     before = {1: drive_state(drive)}
     opts = SimpleNamespace(reset=False, live_ram=False, flash=True)
-    v = verify(PVL, {1: drive}, opts, before=before, stopped_in_check={1})
+    v = verify(PVL, {1: drive}, opts, before=before, stopped_before_writes={1: "check"})
     assert [c.what for c in v.checks] == ["drive unchanged"] and v.ok
     drive.params.write(0x1194, 2, ram=False, rom=True)            # something wrote the motor type
-    v = verify(PVL, {1: drive}, opts, before=before, stopped_in_check={1})
+    v = verify(PVL, {1: drive}, opts, before=before, stopped_before_writes={1: "check"})
     same = v.checks[0]
     assert same.what == "drive unchanged" and not same.ok and same.differences == ["1194h: ROM/RAM (0, 0) before, (2, 0) after"]
     assert "yet the drive changed" in same.note
@@ -245,7 +267,9 @@ def test_a_broken_record_fails_where_it_is():
     o = commission(axes=1, prepare_plc=lambda plc: plc.__setitem__(f"{DS}[{curve}]", 0x07170000 | 10))
     ax = o.axis(1)
     assert ax.error and ax.error_id == 0x0601 and ax.fail_step == curve
-    assert ax.fail_phase == "params"                                # found when the parameters were written
+    assert ax.fail_phase == "preflight"                             # found when the pre-flight walked the records
+    assert downloads(o.result, 1) == [] or all(e.frame.data[3] == 0x20 for e in downloads(o.result, 1))
+    untouched(o.result.drives[1])                                   # so nothing was written
     assert ax.fail_kind == "dataset" and f"dataset word {curve}" in o.report.text()
     assert "dataset malformed" in o.report.text()
 
@@ -295,8 +319,10 @@ def test_command_exits_non_zero_when_the_drives_never_boot(tmp_path, capsys):
 
 
 def test_command_line_errors(tmp_path, capsys):
-    assert main(["commission", str(EXAMPLE), "--axes", "9"]) == 2
-    assert "plc_project commissions 1..8" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exit_:
+        main(["commission", str(EXAMPLE), "--axes", "9"])
+    assert exit_.value.code == 2
+    assert "linmot-st commission: error: argument --axes: 9: must be 1..8" in capsys.readouterr().err
     assert main(["commission", str(EXAMPLE), "--axes", "2", "--node-ids", "3,3"]) == 2
     assert main(["commission", str(EXAMPLE), "--axes", "3", "--node-ids", "1,2"]) == 2
     assert main(["commission", str(EXAMPLE), "--no-emulate"]) == 2
@@ -325,14 +351,18 @@ SEED_PARAMS = EXAMPLE.parent / "seed_parameters.pvl"
 
 
 @pytest.mark.parametrize("args, message", [
-    (["--report", "/proc/nope"], "error: --report /proc/nope: cannot create or write the folder"),
+    (["--report", "/proc/nope"], "linmot-st commission: error: --report /proc/nope: cannot write in /proc"),
+    (["--report", "/sys/kernel"], "error: --report /sys/kernel: cannot write in /sys/kernel"),
+    (["--trace", "/proc/run.log"], "error: --trace /proc/run.log: cannot write in /proc"),
+    (["--report", "no/such/folder"], "error: --report no/such/folder: folder no/such does not exist"),
     (["--bus", "foo"], "error: --bus 'foo': expected sim, virtual[:CHANNEL], or INTERFACE:CHANNEL"),
     (["--bus", "foo:bar"], "error: --bus 'foo:bar': python-can has no interface 'foo'"),
     (["--bus", "udp_multicast:x"], "not supported"),
     (["--trace", "run.txt"], "error: --trace run.txt: the extension says the format"),
     (["--no-flash"], "error: --no-flash with the reset (on by default)"),
     (["--no-flash", "--reset"], "Add --no-reset"),
-], ids=["report", "bus", "bus-interface", "udp", "trace", "no-flash", "no-flash-reset"])
+], ids=["report", "report-sys", "trace-proc", "report-parents", "bus", "bus-interface", "udp", "trace", "no-flash",
+        "no-flash-reset"])
 def test_bad_arguments_are_refused_before_the_build(no_build, capsys, args, message):
     assert main(["commission", str(SEED_CURVE), "-q", *args]) == 2
     assert message in capsys.readouterr().err
@@ -344,8 +374,8 @@ def test_bad_arguments_are_refused_before_the_build(no_build, capsys, args, mess
 ])
 def test_no_flash_is_accepted_where_it_can_work(no_build, tmp_path, pvl, args):
     with pytest.raises(Built):
-        main(["commission", str(pvl), "-q", "--report", str(tmp_path / "new" / "folder"), *args])
-    assert (tmp_path / "new" / "folder").is_dir()                   # created before the build
+        main(["commission", str(pvl), "-q", "--report", str(tmp_path / "folder"), *args])
+    assert list(tmp_path.iterdir()) == []                           # checked, created only when written
 
 
 def test_no_flash_without_reset_commissions_a_curve(capsys):
@@ -384,6 +414,6 @@ def test_a_plc_fault_ends_the_run_and_is_reported():
     assert "PLC FAULT:" in text and "result: FAILED (the PLC faulted" in text
     assert "array index out of range in POU PLCCOMMISSION (plc_project/commission.st:" in text
     assert "node 1: did not finish" in text and o.result.t_end_ns > o.result.t_start_ns
-    # setpoint j is word curve + 19 + j; sending it, the FB asks for words curve + 20 + j and the next one:
-    # the program's Ds[DataIndex + 1] faults once that passes word 652
-    assert o.axis(1).exchanges == 6 + 30 + 1 + 1 + 18 + (652 - 20 - curve + 1)
+    # the pre-flight skips the curve record (19 + 5000 words): the program's Ds[DataIndex] faults there,
+    # after the layer reads and the 4 pre-flight exchanges per parameter
+    assert o.axis(1).exchanges == 6 + 4 * 30

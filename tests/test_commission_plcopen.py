@@ -105,13 +105,13 @@ def test_done_held_while_execute_then_reset_on_falling_edge():
     first = next(i for i, s in enumerate(states) if s[0])
     assert all(s[1] for s in states[:first]), "Busy from the Execute scan until Done"
     assert all(s[0] and not s[1] for s in states[first:]), "Done held while Execute stays TRUE"
-    assert fb["PHASE"] == "LM_COM_DONE" and fb["EXCHANGES"] == 6 + 30 + 532 + 100
+    assert fb["PHASE"] == "LM_COM_DONE" and fb["EXCHANGES"] == 6 + 4 * 30 + 30 + 532 + 100   # + the pre-flight
     fb["EXECUTE"] = False
     b.step(1)
     assert outputs(fb) == (False, False, False, False, 0)
     # a new rising edge commissions again, from the start
     states = run_recording(b, fb, execute_scans=None)
-    assert states[-1][0] and fb["EXCHANGES"] == 668
+    assert states[-1][0] and fb["EXCHANGES"] == 788
 
 
 def test_done_is_a_one_scan_pulse_when_execute_fell_before():

@@ -31,14 +31,18 @@ class FakeVar:
 class FakePlc:
     """Variables of a T_CanMailbox in a dict; `program(plc)` runs once per scan."""
 
-    def __init__(self, program, tick_ns=TICK):
+    def __init__(self, program, tick_ns=TICK, echo_fields=False):
         self.vars = {}
         for box in ("RX", "TX"):
             for i in range(1, 33):
                 self.vars.update({f"{MB}.{box}[{i}].ID": 0, f"{MB}.{box}[{i}].DLC": 0, f"{MB}.{box}[{i}].RTR": False,
                                   f"{MB}.{box}[{i}].DATA": None})   # the array itself: no byte access here
                 self.vars.update({f"{MB}.{box}[{i}].DATA[{j}]": 0 for j in range(8)})
+                if echo_fields:
+                    self.vars[f"{MB}.{box}[{i}].ECHO"] = False
         self.vars.update({f"{MB}.{n}": 0 for n in ("RXCOUNT", "RXLOST", "TXCOUNT", "TXLOST")})
+        if echo_fields:                         # the mailbox of the library (st_lib/types/can.st)
+            self.vars[f"{MB}.TXECHO"] = False
         self.program = program
         self.time_ns = 0
         self.tick_ns = tick_ns
@@ -63,12 +67,13 @@ class FakePlc:
             self.time_ns += self.tick_ns
 
     # helpers for the programs
-    def rx(self):
+    def rx(self, with_echo=False):
         out = []
         for i in range(1, self[f"{MB}.RXCOUNT"] + 1):
             p = f"{MB}.RX[{i}]"
-            out.append(Frame(self[p + ".ID"], bytes(self[f"{p}.DATA[{j}]"] for j in range(self[p + ".DLC"])),
-                             self[p + ".RTR"]))
+            f = Frame(self[p + ".ID"], bytes(self[f"{p}.DATA[{j}]"] for j in range(self[p + ".DLC"])),
+                      self[p + ".RTR"])
+            out.append((f, self[p + ".ECHO"]) if with_echo else f)
         return out
 
     def tx(self, frame):
@@ -180,6 +185,55 @@ def test_invalid_tx_frame_is_an_error():
     sim = CoSim(plc, SimBus(), mailbox=MB)
     with pytest.raises(CoSimError, match="TX\\[1\\]|Tx\\[1\\]"):
         sim.step(1)
+
+
+REQUEST = Frame(0x601, bytes([0x40, 0x18, 0x10, 1, 0, 0, 0, 0]))
+
+
+def recording_plc(seen: list) -> FakePlc:
+    """A PLC with the library's mailbox that sends REQUEST once and records Rx with the echo flags."""
+    def program(plc):
+        if plc.scan_count == 0:
+            plc.tx(REQUEST)
+        seen.extend(plc.rx(with_echo=True))
+    return FakePlc(program, echo_fields=True)
+
+
+def test_echo_puts_the_plcs_frames_back_in_bus_order():
+    """With the library's mailbox CoSim sets TxEcho and returns each sent frame once it ended on the bus,
+    Echo TRUE, in bus order with the received ones; echo=False plays a driver without confirmations."""
+    req = REQUEST
+    for echo, expect in ((None, [(req, True), (Frame(0x581, req.data), False)]),
+                         (False, [(Frame(0x581, req.data), False)])):
+        seen = []
+        plc = recording_plc(seen)
+        bus = SimBus()
+        bus.attach(EchoNode(), "drive", latency_ns=100_000)
+        sim = CoSim(plc, bus, mailbox=MB, echo=echo)
+        sim.step(3)
+        assert plc[f"{MB}.TXECHO"] is (echo is None)
+        assert seen == expect
+        assert sim.frames_received == 1
+
+
+def test_echo_needs_the_field():
+    with pytest.raises(KeyError, match="TxEcho"):
+        CoSim(FakePlc(lambda p: None), SimBus(), mailbox=MB, echo=True)
+    assert CoSim(FakePlc(lambda p: None), SimBus(), mailbox=MB).echo is False   # an old mailbox type
+
+
+def test_real_time_echo_from_receive_own_messages():
+    channel = f"linmot-st-test-{uuid.uuid4().hex}"
+    req = REQUEST
+    seen = []
+    plc = recording_plc(seen)
+    with open_bus(f"virtual:{channel}") as served, \
+            open_bus(f"virtual:{channel}", receive_own_messages=True) as plc_bus:
+        with NodeServer(EchoNode(), served):
+            sim = RealTimeCoSim(plc, plc_bus, mailbox=MB, echo=True)
+            sim.run_until(lambda: len(seen) >= 2, timeout_s=2.0)
+    assert plc[f"{MB}.TXECHO"] is True
+    assert seen[:2] == [(req, True), (Frame(0x581, req.data), False)]
 
 
 def test_bad_mailbox_path():

@@ -1,5 +1,5 @@
-"""`linmot-st emulate`: bad input gives one `error: ...` line and exit status 2 (arguments) or 1 (the bus
-cannot be opened); SIGTERM stops it like Ctrl-C (drive detached, bus shut down, "stopped" line, status 0)."""
+"""`linmot-st emulate`: bad input gives one `linmot-st emulate: error: ...` line and exit status 2
+(arguments) or 1 (the bus cannot be opened); SIGTERM stops it like Ctrl-C (drive detached, bus shut down, "stopped" line, status 0)."""
 
 from __future__ import annotations
 
@@ -15,21 +15,30 @@ from linmot_st.cli import main
 
 
 def _emulate(capsys, *args: str) -> tuple[int, str, str]:
-    rc = main(["emulate", *args])
+    try:
+        rc = main(["emulate", *args])
+    except SystemExit as exc:           # argparse's own checks (types): the same one-line style
+        rc = exc.code
     out, err = capsys.readouterr()
     return rc, out, err
 
 
+E = "linmot-st emulate: error: "
+
+
 @pytest.mark.parametrize("args, rc, message", [
     (["--interface", "nosuch", "--channel", "x"], 2,
-     "error: --interface nosuch --channel x: python-can has no interface 'nosuch'"),
+     E + "--interface nosuch --channel x: python-can has no interface 'nosuch'"),
     (["--interface", "udp_multicast", "--channel", "239.0.0.1"], 2,
-     "error: --interface udp_multicast --channel 239.0.0.1: the udp_multicast interface is not supported"),
-    (["--interface", "virtual", "--channel", "x", "--node-id", "0"], 2, "error: --node-id 0: outside 1..127"),
-    (["--interface", "virtual", "--channel", "x", "--node-id", "128"], 2, "error: --node-id 128: outside 1..127"),
-    (["--interface", "pcan", "--channel", "x", "--bitrate", "0"], 2, "error: --bitrate 0: must be a positive"),
+     E + "--interface udp_multicast --channel 239.0.0.1: the udp_multicast interface is not supported"),
+    (["--interface", "virtual", "--channel", "x", "--node-id", "0"], 2, E + "argument --node-id: 0: must be 1..127"),
+    (["--interface", "virtual", "--channel", "x", "--node-id", "128"], 2,
+     E + "argument --node-id: 128: must be 1..127"),
+    (["--interface", "pcan", "--channel", "x", "--bitrate", "0"], 2, E + "argument --bitrate: 0: not a CAN bit rate"),
+    (["--interface", "pcan", "--channel", "x", "--bitrate", "300000"], 2,
+     E + "argument --bitrate: 300000: not a CAN bit rate"),
     (["--interface", "virtual", "--channel", "x", "--profile", "/nonexistent/drive.json"], 2,
-     "error: --profile /nonexistent/drive.json: No such file or directory"),
+     E + "--profile /nonexistent/drive.json: No such file or directory"),
 ])
 def test_bad_arguments_give_one_error_line(capsys, args, rc, message):
     got_rc, out, err = _emulate(capsys, *args, "--duration", "0")
@@ -43,16 +52,16 @@ def test_bad_profile_content(capsys, tmp_path):
     bad = tmp_path / "drive.json"
     bad.write_text("{ not json")
     rc, _, err = _emulate(capsys, "--interface", "virtual", "--channel", "x", "--profile", str(bad), "--duration", "0")
-    assert rc == 2 and err.startswith(f"error: --profile {bad}:1: not JSON") and err.count("\n") == 1
+    assert rc == 2 and err.startswith(f"{E}--profile {bad}:1: not JSON") and err.count("\n") == 1
     bad.write_text('{"identity": {}}')
     rc, _, err = _emulate(capsys, "--interface", "virtual", "--channel", "x", "--profile", str(bad), "--duration", "0")
-    assert rc == 2 and err.startswith(f"error: --profile {bad}: missing key 'layers'") and err.count("\n") == 1
+    assert rc == 2 and err.startswith(f"{E}--profile {bad}: missing key 'layers'") and err.count("\n") == 1
 
 
 def test_bus_that_cannot_be_opened(capsys):
     # no SocketCAN on this machine (OSError: address family), or no such interface where there is
     rc, out, err = _emulate(capsys, "--interface", "socketcan", "--channel", "nosuchcan7", "--duration", "0")
-    assert rc == 1 and err.startswith("error: cannot open socketcan channel nosuchcan7: ") and err.count("\n") == 1
+    assert rc == 1 and err.startswith(f"{E}cannot open socketcan channel nosuchcan7: ") and err.count("\n") == 1
     assert "Traceback" not in err and out == ""
 
 

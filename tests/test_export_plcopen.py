@@ -588,10 +588,12 @@ def test_cli_writes_valid_xml(tmp_path, capsys):
 
 
 def test_cli_errors(tmp_path, capsys):
-    assert cli_main(["export", "plcopen", str(tmp_path / "no" / "lib.xml")]) == 1
-    assert "folder" in capsys.readouterr().err
-    assert cli_main(["export", "plcopen", str(tmp_path / "lib.xml"), "--schema", str(tmp_path / "x.xsd")]) == 1
-    assert "x.xsd: no such schema file" in capsys.readouterr().err
+    assert cli_main(["export", "plcopen", str(tmp_path / "no" / "lib.xml")]) == 2     # checked before the export
+    assert "linmot-st export plcopen: error: " in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exit_:
+        cli_main(["export", "plcopen", str(tmp_path / "lib.xml"), "--schema", str(tmp_path / "x.xsd")])
+    assert exit_.value.code == 2
+    assert "x.xsd: no such file" in capsys.readouterr().err
     bad = tmp_path / "bad.xsd"
     bad.write_text('<xsd:schema xmlns:xsd="http://www.w3.org/2001/XMLSchema" '
                    'targetNamespace="urn:other"><xsd:element name="other"/></xsd:schema>')

@@ -252,9 +252,9 @@ def test_cli_stdout(capsys, exported):
 ])
 def test_cli_bad_output_paths(tmp_path, capsys, target, message):
     (tmp_path / "afile").write_text("x")
-    assert cli_main(["export", "st", str(tmp_path / target)]) == 1
+    assert cli_main(["export", "st", str(tmp_path / target)]) == 2        # checked before the export
     err = capsys.readouterr().err
-    assert err.startswith("linmot-st export st: ")
+    assert err.startswith("linmot-st export st: error: ")
     assert re.search(message, err)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["afile"]      # nothing half-written
 

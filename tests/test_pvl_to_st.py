@@ -57,9 +57,11 @@ def test_two_axes_layout():
     curve = w.index(0x03170000 | 10)                                         # curve 23, 10 setpoints
     assert w[curve + 1:curve + 3] == [0x00030046, 0x0004000A]                # the seeds' info words
     assert w[-2:] == [0xFF000000, 0]
-    # 6 layer reads + 30 writes + (1 + 3 x 19 + 474) curves + (1 + 3 x 33) CT + 4 flash + 30 + 531 + 99 verify
-    assert dsf.expected_exchanges(dsf.decode(w)) == 1332
-    assert dsf.expected_exchanges(dsf.decode(w), verify=False, flash=False) == 6 + 30 + 532 + 100
+    # 6 layer reads + 4 x 30 pre-flight + 30 writes + (1 + 3 x 19 + 474) curves + (1 + 3 x 33) CT + 4 flash
+    # + 30 + 531 + 99 verify
+    assert dsf.expected_exchanges(dsf.decode(w)) == 1332 + 120
+    assert dsf.expected_exchanges(dsf.decode(w), preflight=False) == 1332
+    assert dsf.expected_exchanges(dsf.decode(w), verify=False, flash=False) == 6 + 120 + 30 + 532 + 100
 
 
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -125,12 +127,23 @@ def test_decode_refuses_broken_streams(edit, message):
 
 
 def test_cli_writes_the_file(tmp_path, capsys):
-    out = tmp_path / "sub" / "ds.st"
+    out = tmp_path / "ds.st"
     assert main(["pvl", "to-st", str(EXAMPLES / "seed_curve.pvl"), "-o", str(out), "--type", "T_Seed"]) == 0
     assert out.read_text() == to_st(load_pvl(EXAMPLES / "seed_curve.pvl"), "T_Seed")
     assert "T_Seed, 35 words" in capsys.readouterr().err
     assert main(["pvl", "to-st", str(EXAMPLES / "seed_curve.pvl"), "-o", "-"]) == 0
     assert capsys.readouterr().out.startswith("(* GENERATED")
+
+
+@pytest.mark.parametrize("target, message", [
+    ("sub/ds.st", "folder {tmp}/sub does not exist"), (".", "is a folder"), ("/proc/ds.st", "cannot write in /proc")])
+def test_cli_output_that_cannot_be_written_is_one_line_and_creates_nothing(tmp_path, capsys, target, message):
+    out = target if target.startswith("/") else str(tmp_path / target)
+    assert main(["pvl", "to-st", str(EXAMPLES / "seed_curve.pvl"), "-o", out]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"linmot-st pvl to-st: error: -o {out}: ") and err.count("\n") == 1
+    assert message.format(tmp=tmp_path) in err
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_cli_errors(tmp_path, capsys):

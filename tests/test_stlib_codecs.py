@@ -386,12 +386,13 @@ def test_box_append_and_nmt_start(c):
     c["BOX"] = {"RXCOUNT": 0, "TXCOUNT": 0, "TXLOST": 0}
     c.run(45, NODEID=42)
     assert c["OK"] and c["BOX"]["TXCOUNT"] == 1
-    assert c["BOX"]["TX"][0] == {"ID": 0, "DLC": 2, "RTR": False, "DATA": [0x01, 42, 0, 0, 0, 0, 0, 0]}
+    assert c["BOX"]["TX"][0] == {"ID": 0, "DLC": 2, "RTR": False, "DATA": [0x01, 42, 0, 0, 0, 0, 0, 0],
+                                 "ECHO": False}
     frame = list(bytes.fromhex("4000201000000000"))
     for n in range(2, 33):
         c.run(44, INDEX=0x600 + n, DLC=8, FRAME=frame)
         assert c["OK"] and c["BOX"]["TXCOUNT"] == n
-    assert c["BOX"]["TX"][31] == {"ID": 0x600 + 32, "DLC": 8, "RTR": False, "DATA": frame}
+    assert c["BOX"]["TX"][31] == {"ID": 0x600 + 32, "DLC": 8, "RTR": False, "DATA": frame, "ECHO": False}
     c.run(44, INDEX=0x601, DLC=8, FRAME=frame)
     assert not c["OK"] and (c["BOX"]["TXCOUNT"], c["BOX"]["TXLOST"]) == (32, 1)
     c.run(45, NODEID=1)

@@ -78,10 +78,22 @@ def run_all(only: list[str] | None = None, out=sys.stdout) -> int:
     return 1 if broken else 0
 
 
+def areas() -> list[str]:
+    return [m.split(".")[1] for m in bench_modules()]
+
+
+def _checked_areas(names: list[str]) -> list[str] | None:
+    from .cliargs import UsageError
+    unknown = [a for a in names if a not in areas()]
+    if unknown:
+        raise UsageError(f"no benchmark named {', '.join(unknown)} (there are: {', '.join(areas())})")
+    return names or None
+
+
 def register(subparsers) -> None:
     p = subparsers.add_parser("bench", help="run the benchmarks and print figures against their targets")
     p.add_argument("areas", nargs="*", metavar="AREA", help="only these areas (e.g. toolchain bus)")
-    p.set_defaults(func=lambda args: run_all(args.areas or None))
+    p.set_defaults(func=lambda args: run_all(_checked_areas(args.areas)))
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -89,7 +101,11 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m linmot_st.bench", description=__doc__.splitlines()[0])
     parser.add_argument("areas", nargs="*", metavar="AREA")
     args = parser.parse_args(argv)
-    return run_all(args.areas or None)
+    from .cliargs import UsageError
+    try:
+        return run_all(_checked_areas(args.areas))
+    except UsageError as exc:
+        parser.error(str(exc))
 
 
 if __name__ == "__main__":

@@ -24,8 +24,16 @@ SUBCOMMAND_MODULES = [
 ]
 
 
+class Parser(argparse.ArgumentParser):
+    """argparse with the commands' one error style: a single line `linmot-st CMD: error: ...`, exit 2
+    (the subcommands' parsers are of this class too: add_subparsers takes the parent's class)."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="linmot-st", description=__doc__.splitlines()[0])
+    parser = Parser(prog="linmot-st", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in SUBCOMMAND_MODULES:
         try:
@@ -38,13 +46,38 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _leaf_parsers(parser: argparse.ArgumentParser):
+    """Every parser that runs a command (the subcommands, and theirs)."""
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for sub in action.choices.values():
+                yield sub
+                yield from _leaf_parsers(sub)
+
+
 def main(argv: list[str] | None = None) -> int:
+    try:
+        return _main(argv)
+    except KeyboardInterrupt:     # Ctrl-C before a command's own handling (while starting): no traceback
+        print("linmot-st: interrupted", file=sys.stderr)
+        return 130
+
+
+def _main(argv: list[str] | None) -> int:
+    from .cliargs import UsageError, error
+
     parser = build_parser()
+    for sub in _leaf_parsers(parser):
+        sub.set_defaults(_prog=sub.prog)          # `linmot-st CMD`, for the common error style
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):
         parser.print_help()
         return 2
-    return int(args.func(args) or 0)
+    try:
+        return int(args.func(args) or 0)
+    except UsageError as exc:                     # a bad argument found by a command's own checks
+        error(args, str(exc))
+        return 2
 
 
 if __name__ == "__main__":

@@ -8,6 +8,9 @@ PLC time t:
   3. plc.step(1);
   4. Tx[1..TxCount] are sent in order, ready at t, and TxCount is set to 0 (a TxCount outside 0..32, or
      a Tx frame with Id > 16#7FF or Dlc > 8, raises CoSimError: no CAN driver could send it).
+With `echo` (the default) the mailbox's TxEcho is set and step 2 also puts each SDO request the PLC sent
+(600h..67Fh) back into Rx once its transmission ended on the bus (Echo TRUE), in bus order with the
+received frames: the transmit confirmation of a PLC CAN driver (docs/plc-integration.md section 1).
 `RealTimeCoSim` does the same on a python-can bus against the wall clock (`linmot-st commission
 --bus virtual|socketcan:CHANNEL`): scan k starts at the wall time of the PLC's clock, and the frames
 received until then go into Rx.
@@ -24,6 +27,11 @@ from typing import Any, Callable
 from linmot_st.bus.frame import Frame
 
 MAILBOX_FRAMES = 32   # T_CanFrames : ARRAY[1..32] OF T_CanFrame
+
+
+def is_echoed(can_id: int) -> bool:
+    """The PLC's frames the mailbox confirms (TxEcho): its SDO requests, 600h + node."""
+    return 0x601 <= can_id <= 0x67F
 
 
 class CoSimError(Exception):
@@ -49,6 +57,24 @@ class Mailbox:
             raise KeyError(f"{path} is not a T_CanMailbox variable of this PLC: {exc}") from None
         self._rx: list[tuple | None] = [None] * (MAILBOX_FRAMES + 1)   # 1-based, bound lazily
         self._tx: list[tuple | None] = [None] * (MAILBOX_FRAMES + 1)
+        # TxEcho and Rx[i].Echo: absent from a mailbox type older than the transmit confirmation
+        try:
+            self._tx_echo = plc.var(f"{path}.TxEcho")
+        except KeyError:
+            self._tx_echo = None
+
+    @property
+    def has_echo(self) -> bool:
+        return self._tx_echo is not None
+
+    def set_tx_echo(self, on: bool) -> None:
+        """Tell the library whether Rx holds the echoes of the PLC's frames (an error without the field)."""
+        if self._tx_echo is None:
+            if on:
+                raise KeyError(f"{self.path} has no TxEcho field: its T_CanMailbox predates the transmit "
+                               "confirmation (use echo=False)")
+            return
+        self._tx_echo.value = on
 
     def _bind(self, which: str, i: int) -> tuple:
         """(Id, Dlc, Rtr, Data) accessors of one frame slot. Data is the whole ARRAY[0..7] OF BYTE when
@@ -57,7 +83,8 @@ class Mailbox:
         data = var(f"{p}.Data")
         if not (hasattr(data, "write_bytes") and hasattr(data, "read_bytes") and getattr(data, "nbytes", 0) == 8):
             data = [var(f"{p}.Data[{j}]") for j in range(8)]
-        return (var(f"{p}.Id"), var(f"{p}.Dlc"), var(f"{p}.Rtr"), data)
+        echo = var(f"{p}.Echo") if self._tx_echo is not None else None
+        return (var(f"{p}.Id"), var(f"{p}.Dlc"), var(f"{p}.Rtr"), data, echo)
 
     @property
     def rx_count(self) -> int:
@@ -71,8 +98,9 @@ class Mailbox:
     def tx_lost(self) -> int:
         return self._tx_lost.value
 
-    def write_rx(self, frames: list[Frame]) -> int:
-        """Rx[1..n] := frames (n <= 32), RxCount := n, RxLost += the surplus; returns the surplus."""
+    def write_rx(self, frames: list[Frame], echoes: list[bool] | None = None) -> int:
+        """Rx[1..n] := frames (n <= 32), RxCount := n, RxLost += the surplus; returns the surplus.
+        `echoes[i]` marks frames[i] as the echo of one of the PLC's own frames."""
         n = len(frames)
         lost = 0
         if n > MAILBOX_FRAMES:
@@ -91,6 +119,8 @@ class Mailbox:
                     byte_var.value = data[j] if j < len(data) else 0
             else:
                 dst.write_bytes(data if len(data) == 8 else data.ljust(8, b"\0"))
+            if slot[4] is not None:
+                slot[4].value = bool(echoes and echoes[i])
         self._rx_count.value = n
         return lost
 
@@ -136,13 +166,19 @@ class Mailbox:
 
 
 class CoSim:
-    """A PLC stepped scan by scan against a SimBus; the PLC is the bus endpoint named `name`."""
+    """A PLC stepped scan by scan against a SimBus; the PLC is the bus endpoint named `name`. `echo`
+    (default: when the mailbox type has the field) gives the PLC the echo of its transmitted frames."""
 
-    def __init__(self, plc: Any, bus: Any, mailbox: str = "CONFIG0.RES0.CAN0", name: str = "plc") -> None:
+    def __init__(self, plc: Any, bus: Any, mailbox: str = "CONFIG0.RES0.CAN0", name: str = "plc",
+                 echo: bool | None = None) -> None:
         self.plc = plc
         self.bus = bus
         self.mailbox = Mailbox(plc, mailbox)
         self.endpoint = bus.endpoint(name)
+        self.name = name
+        self.echo = self.mailbox.has_echo if echo is None else echo
+        self.mailbox.set_tx_echo(self.echo)
+        self._trace_pos = len(bus.trace)   # the PLC's own frames are read from the bus trace (bus order)
         self.scans = 0
         self.frames_sent = 0
         self.frames_received = 0
@@ -158,7 +194,14 @@ class CoSim:
                 raise CoSimError(f"PLC time {t} ns is behind the bus ({bus.now} ns): was the PLC reset?")
             bus.run_until(t)
             inbox = ep.inbox
-            if inbox:
+            own = self._echoes() if self.echo else None
+            if own:
+                ep.inbox = []
+                self.frames_received += len(inbox)
+                merged = sorted([(te, 0, f) for te, f in inbox] + [(te, 1, f) for te, f in own],
+                                key=lambda x: x[0])
+                self.rx_dropped += mb.write_rx([f for _, _, f in merged], [o == 1 for _, o, _ in merged])
+            elif inbox:
                 ep.inbox = []
                 self.frames_received += len(inbox)
                 self.rx_dropped += mb.write_rx([f for _, f in inbox])
@@ -171,6 +214,14 @@ class CoSim:
                 for f in frames:
                     send(f, t)
                 self.frames_sent += len(frames)
+
+    def _echoes(self) -> list[tuple[int, Frame]]:
+        """The PLC's frames whose transmission ended since the previous scan, as (end time, frame)."""
+        trace, i, name = self.bus.trace, self._trace_pos, self.name
+        out = [(e.end_ns, e.frame) for e in trace[i:]
+               if e.sender == name and e.status != "error" and is_echoed(e.frame.can_id)]
+        self._trace_pos = len(trace)
+        return out
 
     def run_until(self, predicate: Callable[[], bool], max_scans: int) -> int:
         """Step until predicate() is true (checked before each scan and after the last); returns the
@@ -193,11 +244,16 @@ class RealTimeCoSim:
     """
 
     def __init__(self, plc: Any, can_bus: Any, mailbox: str = "CONFIG0.RES0.CAN0", *,
-                 clock: Callable[[], int] = time.monotonic_ns) -> None:
+                 clock: Callable[[], int] = time.monotonic_ns, echo: bool = False) -> None:
         self.plc = plc
         self.can_bus = can_bus
         self.mailbox = Mailbox(plc, mailbox)
         self.clock = clock
+        # echo: the bus was opened with receive_own_messages=True, so it returns the PLC's own frames once
+        # sent (python-can marks them is_rx False): they go into Rx as echoes, in the order received
+        self.echo = echo
+        self.mailbox.set_tx_echo(echo)
+        self._pending_echo: list[bool] = []
         self.scans = 0
         self.frames_sent = 0
         self.frames_received = 0
@@ -218,7 +274,11 @@ class RealTimeCoSim:
                 continue
             if msg.is_error_frame or msg.is_extended_id or getattr(msg, "is_fd", False):
                 continue
+            own = not getattr(msg, "is_rx", True)
+            if own and not (self.echo and is_echoed(msg.arbitration_id)):
+                continue
             pending.append(Frame.from_message(msg))
+            self._pending_echo.append(own)
 
     def _scans(self, n: int | None, predicate: Callable[[], bool] | None, timeout_s: float | None) -> int:
         plc, mb = self.plc, self.mailbox
@@ -237,8 +297,9 @@ class RealTimeCoSim:
                 self.overruns += 1
             self.max_lateness_ns = max(self.max_lateness_ns, late)
             frames, self._pending = self._pending, []
-            self.frames_received += len(frames)
-            self.rx_dropped += mb.write_rx(frames)
+            echoes, self._pending_echo = self._pending_echo, []
+            self.frames_received += len(frames) - sum(echoes)
+            self.rx_dropped += mb.write_rx(frames, echoes)
             plc.step(1)
             self.scans += 1
             k += 1

@@ -80,6 +80,7 @@ ERRORS: tuple[ErrorDef, ...] = (
     ErrorDef("Evicted", 0x0205, "the FB was not called while it held the channel and lost its turn"),
     ErrorDef("TxFull", 0x0206, "the mailbox Tx array was full: frame not queued"),
     ErrorDef("DriveRebooted", 0x0207, "the drive sent a boot-up message during the service"),
+    ErrorDef("NodeIdInUse", 0x0208, "another channel of the same mailbox owns this node ID: nothing is sent for it"),
     # 03xx transfer
     ErrorDef("SdoTimeout", 0x0301, "no SDO response within the timeout"),
     ErrorDef("SdoAbort", 0x0302, "the drive answered with an SDO abort (code on the AbortCode output)"),
@@ -91,6 +92,7 @@ ERRORS: tuple[ErrorDef, ...] = (
     ErrorDef("UploadTooBig", 0x0308, "the curve on the drive has more setpoints than T_LmSetpoints holds, or a data size not a multiple of 4"),
     ErrorDef("UploadInconsistent", 0x0309, "uploaded curve: the info block's setpoints x 4 differ from the data size"),
     ErrorDef("ListFull", 0x030A, "UPID list longer than T_LmUpidList holds (the list holds the first 2048)"),
+    ErrorDef("NotOperational", 0x030B, "after its boot-up the drive did not report NMT Operational within BootTimeout (FailActual = the last NMT state it reported, 00h none)"),
     # 04xx E1100 result codes (16#0400 + rr)
     ErrorDef("ResultBase", RESULT_BASE, "E1100 result code rr: ErrorID = 16#0400 + rr (the named ones follow)"),
     ErrorDef("ResultNotFinished", RESULT_BASE + 0x04, "result 04h: block not finished where the end was expected / flash busy"),
@@ -114,6 +116,11 @@ ERRORS: tuple[ErrorDef, ...] = (
     ErrorDef("DatasetInvalid", 0x0601, "commissioning dataset malformed: magic word, format version, counts or record order wrong (FailStep = the word index)"),
     ErrorDef("ResetNeedsFlash", 0x0602, "reset requested without the flash save while the dataset holds curves or command-table entries (the reset would lose them)"),
     ErrorDef("VerifyMismatch", 0x0603, "read-back differs from the dataset (FailItem, FailStep, FailExpected, FailActual say where)"),
+    ErrorDef("NoSuchUpid", 0x0604, "pre-flight: the drive has no parameter with this UPID (FailItem); nothing was written"),
+    ErrorDef("NotWritable", 0x0605, "pre-flight: the drive's parameter cannot be written (its address usage has no ROM write); nothing was written"),
+    ErrorDef("AboveMax", 0x0606, "pre-flight: the dataset's value (FailActual) is above the drive's maximum (FailExpected); nothing was written"),
+    ErrorDef("BelowMin", 0x0607, "pre-flight: the dataset's value (FailActual) is below the drive's minimum (FailExpected); nothing was written"),
+    ErrorDef("CurveMemory", 0x0608, "pre-flight: the curves need more bytes (FailActual) than the drive's curve memory (FailExpected, the CurveMemory input); nothing was written"),
     # 0140..014F invalid motion input (before any frame is sent)
     ErrorDef("InvalidVelocity", 0x0140, "motion: velocity zero, negative, or beyond what the command can carry"),
     ErrorDef("InvalidAcceleration", 0x0141, "motion: acceleration zero, negative, or beyond what the command can carry"),

@@ -108,12 +108,15 @@ class Bench(Rig):
     prog = PROG
 
     def __init__(self, nodes: int = 1, *, bitrate: int = 500_000, timings: Any = None, backend: str = "auto",
-                 enable: bool = True, drive_kwargs: dict | None = None, task_ms: int = 1):
+                 enable: bool = True, drive_kwargs: dict | None = None, task_ms: int = 1,
+                 echo: bool | None = None):
         from linmot_st.emulator import DriveTimings, E1100Drive
 
         timings = timings or DriveTimings.fast()
-        super().__init__(bench_build(backend, task_ms, self.source), nodes=range(1, nodes + 1), bitrate=bitrate, mailbox=MAILBOX,
-                         drive_factory=lambda n: E1100Drive(n, timings=timings, **(drive_kwargs or {})))
+        super().__init__(bench_build(backend, task_ms, self.source), nodes=range(1, nodes + 1), bitrate=bitrate,
+                         mailbox=MAILBOX,
+                         drive_factory=lambda n: E1100Drive(n, timings=timings, **(drive_kwargs or {})),
+                         echo=echo)
         if enable:
             for n in range(1, nodes + 1):
                 self.plc[f"{self.prog}.CH{n}.NODEID"] = n

@@ -132,13 +132,16 @@ PROGRAM Echo
   i := 0;
   WHILE i < CAN0.RxCount DO   (* not FOR: MatIEC of 2024 runs FOR i := 1 TO 1 zero times (spec/matiec.md) *)
     i := i + 1;
-    Seen := Seen + 1;
-    IF CAN0.TxCount < 32 THEN
-      CAN0.TxCount := CAN0.TxCount + 1;
-      CAN0.Tx[CAN0.TxCount] := CAN0.Rx[i];
-      CAN0.Tx[CAN0.TxCount].Id := CAN0.Rx[i].Id + 1;
-    ELSE
-      CAN0.TxLost := CAN0.TxLost + 1;
+    (* an echo is the confirmation of a frame this program sent (TxEcho): not counted, not sent back *)
+    IF NOT CAN0.Rx[i].Echo THEN
+      Seen := Seen + 1;
+      IF CAN0.TxCount < 32 THEN
+        CAN0.TxCount := CAN0.TxCount + 1;
+        CAN0.Tx[CAN0.TxCount] := CAN0.Rx[i];
+        CAN0.Tx[CAN0.TxCount].Id := CAN0.Rx[i].Id + 1;
+      ELSE
+        CAN0.TxLost := CAN0.TxLost + 1;
+      END_IF;
     END_IF;
   END_WHILE;
 END_PROGRAM

@@ -3,7 +3,8 @@
 Each fault has a predicate on the frame, an optional sender name and an optional number of
 occurrences; `hits` records (t_ns, sender, frame) of every frame it acted on. The bus applies the
 faults of a stage in the order they were added (docs/bus.md, "Fault hooks"):
-  queued  -> delay            the frame becomes ready `delay_ns` later (the sender is slow)
+  queued  -> delay            the frame becomes ready `delay_ns` later (the sender is slow); with `fifo`
+                              the sender's frames queued behind it wait for it (it keeps its order)
   start   -> drop             the frame never reaches the bus (lost in the sender): no bus time
              corrupt          the frame is sent but destroyed by an error frame; the sender's controller
                               retransmits it automatically (real CAN: receivers never see a bad frame)
@@ -29,6 +30,7 @@ class Fault:
     sender: str | None = None                  # only frames sent by this participant
     count: int | None = None                   # act on at most this many frames (None: every match)
     delay_ns: int = 0                          # delay
+    fifo: bool = False                         # delay: the sender's later frames wait behind the delayed one
     mutate: Callable[[Frame], Frame] | None = None   # mutate_payload
     hits: list[tuple[int, str, Frame]] = field(default_factory=list)
     active: bool = True

@@ -44,7 +44,7 @@ class _Part:
     """A participant's state on the bus."""
 
     __slots__ = ("name", "node", "latency", "queue", "timer", "order", "tec", "bus_off", "sent", "discarded",
-                 "has_timer", "observe")
+                 "has_timer", "observe", "hold_until")
 
     def __init__(self, name: str, node: Any, latency: int, order: int) -> None:
         self.name, self.node, self.latency, self.order = name, node, latency, order
@@ -58,6 +58,7 @@ class _Part:
         self.bus_off = False
         self.sent = 0
         self.discarded = 0
+        self.hold_until = 0      # a FIFO delay holds the frames queued behind the delayed one until then
 
 
 class Endpoint:
@@ -170,6 +171,7 @@ class SimBus:
                 return   # removed meanwhile
             self._abort_tx_of(part, t)
             part.queue.clear()
+            part.hold_until = 0
             part.tec, part.bus_off = 0, False
             if hook is not None:
                 self._queue_all(part, t, getattr(part.node, hook)(t))
@@ -208,12 +210,13 @@ class SimBus:
         return self._add_fault(Fault("drop", predicate, sender, count))
 
     def delay(self, predicate: Predicate, delay_ns: int, *, sender: str | None = None,
-              count: int | None = None) -> Fault:
-        """Matching frames become ready ``delay_ns`` later than the sender asked (later frames of the
-        same sender that are ready earlier overtake them)."""
+              count: int | None = None, fifo: bool = False) -> Fault:
+        """Matching frames become ready ``delay_ns`` later than the sender asked. Later frames of the
+        same sender that are ready earlier overtake them, unless ``fifo``: then they wait behind the
+        delayed frame, as behind a sender that is slow but keeps its order (a sequential SDO server)."""
         if delay_ns < 0:
             raise ValueError("delay_ns must be >= 0")
-        return self._add_fault(Fault("delay", predicate, sender, count, delay_ns=delay_ns))
+        return self._add_fault(Fault("delay", predicate, sender, count, delay_ns=delay_ns, fifo=fifo))
 
     def duplicate(self, predicate: Predicate, *, sender: str | None = None, count: int | None = None) -> Fault:
         """Matching frames are transmitted twice in a row (receivers get both)."""
@@ -258,6 +261,10 @@ class SimBus:
             if fault.matches(part.name, frame):
                 fault.hit(ready, part.name, frame)
                 ready += fault.delay_ns
+                if fault.fifo:
+                    part.hold_until = max(part.hold_until, ready)
+        if ready < part.hold_until:
+            ready = part.hold_until
         self._seq += 1
         q = part.queue
         if not q or ready >= q[-1][0]:

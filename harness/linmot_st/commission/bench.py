@@ -178,6 +178,28 @@ def run() -> list[dict]:
             window = _scan_us(p)
             out += [_fig(f"dataset {label}: 8 FBs per scan, VAR_IN_OUT ({backend})", inout, "us"),
                     _fig(f"dataset {label}: 8 FBs per scan, 2-word window ({backend})", window, "us")]
+    return out + fault_matrix_figures(res)
+
+
+def fault_matrix_figures(res) -> list[dict]:
+    """The fault-injection matrix (faultmatrix.py): its totals against the targets of the reliability issue."""
+    from .faultmatrix import FAMILIES, PHASES, run_matrix, totals
+    t0 = time.perf_counter()
+    cells = run_matrix(build=res)
+    wall = time.perf_counter() - t0
+    t = totals(cells)
+    n = t["cells"]
+    label = f"fault matrix ({len(FAMILIES)} families x {len(PHASES)} phases)"
+    out = [_fig(f"{label}: cells", n, ""),
+           _fig(f"{label}: failures reported / faults tolerated", f"{t['reported']} / {t['tolerated']}", "")]
+    for key, what in (("false_successes", "false successes"), ("stale_confirmations", "stale confirmations"),
+                      ("duplicate_false_alarms", "duplicate false alarms"), ("false_alarms", "false alarms"),
+                      ("beyond_bound", "reported beyond the bound"), ("hangs", "hangs"), ("crashes", "crashes"),
+                      ("mc_left_stopped", "MC left stopped by a failure"),
+                      ("wrote_before_writes", "writes by a run that failed before writing")):
+        out.append(_fig(f"{label}: {what}", t[key], "", "== 0"))
+    out += [_fig(f"{label}: next run succeeds", t["recovered"], "cells", f">= {n}"),
+            _fig(f"{label}: wall time ({res.backend})", wall, "s")]
     return out
 
 

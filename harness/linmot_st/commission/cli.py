@@ -6,7 +6,8 @@ every axis is done or failed (progress on stderr), verify each emulated drive's 
 file, print the report (stdout) and write the report folder. Exit status: 0 when every axis was
 commissioned and the verification passed, 1 otherwise (also when the report folder cannot be written after
 the run), 2 for bad arguments (checked before the build: the bus spec, options that cannot work together, a
-report folder or trace file that cannot be created).
+report folder or trace file that cannot be written), 130 when Ctrl-C stopped the run (the report of what
+was done is printed and written first).
 """
 
 from __future__ import annotations
@@ -14,6 +15,9 @@ from __future__ import annotations
 import argparse
 import sys
 from dataclasses import dataclass
+
+from ..cliargs import (UsageError, can_bitrate, check_output_file, check_output_folder, error, int_range,
+                       positive_seconds)
 
 
 def _node_ids(text: str) -> list[int]:
@@ -56,7 +60,10 @@ def command_line(args: argparse.Namespace) -> str:
             parts += [flag, f"{value:g}" if isinstance(value, float) else str(value)]
     if args.node_ids:
         parts += ["--node-ids", ",".join(map(str, args.node_ids))]
-    for name, default in (("live_ram", False), ("flash", True), ("reset", True), ("verify", True)):
+    if args.curve_memory is not None:
+        parts += ["--curve-memory", str(args.curve_memory)]
+    for name, default in (("live_ram", False), ("flash", True), ("reset", True), ("verify", True),
+                          ("preflight", True)):
         if getattr(args, name) != default:
             parts.append(f"--{'' if getattr(args, name) else 'no-'}{name.replace('_', '-')}")
     if not args.emulate:
@@ -67,27 +74,6 @@ def command_line(args: argparse.Namespace) -> str:
 
 
 DEFAULTS = {"bus": "sim", "bitrate": 500_000, "backend": "auto", "trace_format": "log"}
-
-
-def _writable_folder(path: str) -> None:
-    """Create the report folder now (OSError if it cannot be), so that a bad path fails before the run."""
-    import os
-    from pathlib import Path
-    folder = Path(path)
-    folder.mkdir(parents=True, exist_ok=True)
-    if not os.access(folder, os.W_OK | os.X_OK):
-        raise PermissionError(13, "not writable", str(folder))
-
-
-def _check_trace_path(path: str) -> None:
-    import os
-    from pathlib import Path
-    p = Path(path)
-    if p.suffix.lower() not in (".log", ".asc", ".blf"):
-        raise ValueError(f"--trace {path}: the extension says the format: .log (candump), .asc or .blf")
-    parent = p.parent if str(p.parent) else Path(".")
-    if not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK):
-        raise ValueError(f"--trace {path}: cannot write into {parent}")
 
 
 @dataclass
@@ -105,13 +91,15 @@ class Prepared:
 def add_run_arguments(p, *, timings_default: str) -> None:
     """The arguments `commission` and `motion` share."""
     p.add_argument("file", metavar="FILE.pvl", help="the PVL file (LinMot-Talk export)")
-    p.add_argument("--axes", type=int, default=None, metavar="N", help="number of drives, 1..8 (default 1)")
+    p.add_argument("--axes", type=int_range(1, 8), default=None, metavar="N",
+                   help="number of drives, 1..8 (default 1)")
     p.add_argument("--node-ids", type=_node_ids, default=None, metavar="IDS",
                    help="their CANopen node IDs, comma-separated (default 1..N)")
     p.add_argument("--bus", default="sim", metavar="BUS",
                    help="sim (default: simulated bus, virtual time), virtual[:CHANNEL] (python-can, real time), "
                         "socketcan:CHANNEL, or INTERFACE:CHANNEL")
-    p.add_argument("--bitrate", type=int, default=500_000, metavar="B", help="bit/s (default 500000)")
+    p.add_argument("--bitrate", type=can_bitrate, default=500_000, metavar="B",
+                   help="bit/s, a CANopen rate (default 500000)")
     p.add_argument("--backend", choices=("auto", "matiec", "builtin"), default="auto",
                    help="ST compiler (default auto: MatIEC where installed)")
     p.add_argument("--trace", metavar="FILE", help="also write the CAN trace here (.log, .asc or .blf)")
@@ -120,8 +108,14 @@ def add_run_arguments(p, *, timings_default: str) -> None:
     p.add_argument("--report", metavar="DIR", help="write the report folder (report.md, report.json, trace, plots)")
     p.add_argument("--drive-timings", choices=("real", "fast"), default=None,
                    help=f"emulated drive durations (boot 4 s, MC start 3 s, ...) or short ones ({timings_default})")
-    p.add_argument("--timeout", type=float, default=None, metavar="S",
+    p.add_argument("--timeout", type=positive_seconds, default=None, metavar="S",
                    help="give up after S seconds of PLC time (default: from the dataset size)")
+    p.add_argument("--preflight", action=argparse.BooleanOptionalAction, default=True,
+                   help="before the first write, the PLC asks each drive whether it has every UPID, may write it "
+                        "and takes its value, and whether the curves fit (default on)")
+    p.add_argument("--curve-memory", type=int_range(0), default=None, metavar="BYTES",
+                   help="the drives' curve memory for the pre-flight (70 + 4 x setpoints per curve); default: "
+                        "the emulated drives' (256 KiB), 0 (not checked) with --no-emulate")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
 
 
@@ -140,44 +134,38 @@ def prepare_run(args: argparse.Namespace, *, flash: bool = True, reset: bool = T
     from .runner import RunOptions, check_bus_spec
 
     err = sys.stderr
+    # the output paths first: nothing is read, built or run for a command whose results cannot be kept
+    if args.trace:
+        check_output_file(args.trace, f"--trace {args.trace}", (".log", ".asc", ".blf"))
+    if args.report:
+        check_output_folder(args.report, f"--report {args.report}")
     pvl = load_or_report(args.file, err)
     if pvl is None:
         return 1
     axes = args.axes if args.axes is not None else (len(args.node_ids) if args.node_ids else 1)
     if args.node_ids and len(args.node_ids) != axes:
-        print(f"error: --axes {axes} but {len(args.node_ids)} node IDs", file=err)
-        return 2
+        raise UsageError(f"--axes {axes} but {len(args.node_ids)} node IDs")
     opts = RunOptions(axes=axes, node_ids=args.node_ids, bus=args.bus, bitrate=args.bitrate,
                       live_ram=live_ram, flash=flash, reset=reset, verify=verify,
+                      preflight=args.preflight, curve_memory=args.curve_memory,
                       timings=timings, timeout_s=args.timeout, emulate=emulate)
     try:
         opts.nodes()
         check_bus_spec(opts.bus)
         if not opts.emulate and opts.simulated:
             raise ValueError("--no-emulate needs a real bus (--bus socketcan:CHANNEL)")
-        if opts.bitrate <= 0 or 1_000_000_000 % opts.bitrate:
-            raise ValueError(f"--bitrate {opts.bitrate}: must divide 1e9 (125000, 250000, 500000, 1000000)")
         if opts.reset and not opts.flash and (pvl.curves or pvl.command_table):
             raise ValueError("--no-flash with the reset (on by default): the reset would reload the old curves and "
                              "command table from flash, so the FB refuses it (ResetNeedsFlash). Add --no-reset "
                              "(RAM then holds the new curves and entries until the next power cycle), or keep the "
                              "flash save")
-        if args.trace:
-            _check_trace_path(args.trace)
-        if args.report:
-            try:
-                _writable_folder(args.report)
-            except OSError as e:
-                raise ValueError(f"--report {args.report}: cannot create or write the folder "
-                                 f"({e.strerror or e})") from None
     except ValueError as e:
-        print(f"error: {e}", file=err)
-        return 2
+        raise UsageError(str(e)) from None
     try:
         dataset = from_pvl(pvl)
         project = prepare(pvl, Path(args.file).name)
     except (DatasetError, FileNotFoundError) as e:
-        print(f"error: {e}", file=err)
+        error(args, str(e))
         return 1
     t0 = time.perf_counter()
     try:
@@ -212,13 +200,13 @@ def write_outputs(args: argparse.Namespace, report, result) -> int:
         try:
             write_trace(result.trace, args.trace)
         except (OSError, ValueError) as e:
-            print(f"error: --trace {args.trace}: {getattr(e, 'strerror', None) or e}", file=err)
+            error(args, f"--trace {args.trace}: {getattr(e, 'strerror', None) or e}")
             status = 1
     if args.report:
         try:
             files = report.write(Path(args.report), args.trace_format)
         except OSError as e:
-            print(f"error: --report {args.report}: {e.strerror or e} ({e.filename or args.report})", file=err)
+            error(args, f"--report {args.report}: {e.strerror or e} ({e.filename or args.report})")
             return 1
         print(f"report: {args.report}/report.md, report.json, {files['trace']}, "
               f"{len(files['plots'])} curve plot(s)")
@@ -242,7 +230,7 @@ def run_command(args: argparse.Namespace) -> int:
     try:
         result = run(prep.pvl, prep.opts, prep.build, dataset=prep.dataset, progress=progress)
     except (ValueError, OSError) as e:
-        print(f"error: {e}", file=err)
+        error(args, str(e))
         return 2
     finally:
         if progress:
@@ -250,7 +238,7 @@ def run_command(args: argparse.Namespace) -> int:
     report = commission_report(args, prep, result, command_line(args))
     sys.stdout.write(report.text())             # first: whatever happens to the files, the result is shown
     sys.stdout.flush()
-    status = 0 if report.figures["result"]["passed"] else 1
+    status = 0 if report.figures["result"]["passed"] else 130 if result.interrupted else 1
     return write_outputs(args, report, result) or status
 
 

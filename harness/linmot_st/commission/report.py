@@ -27,11 +27,12 @@ from .runner import RunResult
 from .verify import Verification
 
 SDO_FRAME_BITS = unstuffed_bus_bits(8)      # 111: an SDO request or answer without stuff bits, IFS included
-PHASE_TITLES = {"start": "start (dataset header)", "check": "compatibility check", "params": "parameters",
-                "curves": "curves", "ct": "command table", "flash": "flash save", "reset": "reset + boot",
-                "verify": "verify (read back)"}
-TRANSFER_PHASES = ("check", "params", "curves", "ct", "verify")
-WAIT_PHASES = ("start", "flash", "reset")      # their time is the drive's own work, not the bus
+PHASE_TITLES = {"wait": "waiting for the drive", "start": "start (dataset header)", "check": "compatibility check",
+                "preflight": "pre-flight check", "params": "parameters", "curves": "curves", "ct": "command table",
+                "flash": "flash save", "reset": "reset + boot", "verify": "verify (read back)"}
+NMT_STATES = {0x00: "none (no heartbeat)", 0x04: "04h stopped", 0x05: "05h operational", 0x7F: "7Fh pre-operational"}
+TRANSFER_PHASES = ("check", "preflight", "params", "curves", "ct", "verify")
+WAIT_PHASES = ("wait", "start", "flash", "reset")      # their time is the drive's own work, not the bus
 
 
 def lower_bound_ns(exchanges: int, bit_ns: int) -> int:
@@ -42,9 +43,10 @@ def necessary_exchanges(ds: Dataset, opts, transfer_only: bool = False) -> int:
     """The SDO exchanges one axis cannot do without in a successful run with these options: every write and
     read of the dataset (`expected_exchanges`), and, for the whole run, the flash services with one poll per
     store (the FB must poll at least once to learn the save ended) and the reset request."""
+    preflight = getattr(opts, "preflight", True)
     if transfer_only:
-        return expected_exchanges(ds, verify=opts.verify, flash=False)
-    n = expected_exchanges(ds, verify=opts.verify, flash=opts.flash)
+        return expected_exchanges(ds, verify=opts.verify, flash=False, preflight=preflight)
+    n = expected_exchanges(ds, verify=opts.verify, flash=opts.flash, preflight=preflight)
     if opts.flash and (ds.curves or ds.entries):
         n += (1 if ds.curves else 0) + (1 if ds.entries else 0)
     return n + (1 if opts.reset else 0)
@@ -109,7 +111,8 @@ class Report:
                 error_id=ax.error_id, error=describe(ax.error_id, ax.abort_code) if ax.error else "",
                 abort_code=ax.abort_code, failure=self.failure_text(ax) if ax.error else "",
                 fail=dict(phase=ax.fail_phase, kind=ax.fail_kind, item=ax.fail_item, step=ax.fail_step,
-                          expected=ax.fail_expected, actual=ax.fail_actual) if ax.error else None,
+                          expected=ax.fail_expected, actual=ax.fail_actual, delay_ms=ax.fail_delay_ns / 1e6,
+                          mc_stopped=ax.mc_stopped) if ax.error else None,
                 drive_layer=dict(zip(("tree_id", "main_version", "sub_version"), ax.drive_layer)),
                 up_ms=ax.up_ns / 1e6 if ax.up_ns is not None else None,
                 start_ms=ax.started_ns / 1e6 if ax.started_ns is not None else None,
@@ -143,12 +146,13 @@ class Report:
                          entries=len(self.dataset.entries), words=self.dataset.words),
             options=dict(axes=len(r.axes), node_ids=r.node_ids, bus=r.options.bus, bitrate=r.options.bitrate,
                          live_ram=r.options.live_ram, flash=r.options.flash, reset=r.options.reset,
-                         verify=r.options.verify, drive_timings=r.options.timing_kind() if r.options.emulate else None,
+                         verify=r.options.verify, preflight=r.options.preflight,
+                         drive_timings=r.options.timing_kind() if r.options.emulate else None,
                          task_ms=r.tick_ns / 1e6),
             axes=axes,
             run=dict(start_ms=r.t_start_ns / 1e6, end_ms=r.t_end_ns / 1e6, time_ms=span / 1e6,
                      exchanges=total_ex, necessary_exchanges=need, scans=r.scans, wall_s=round(r.wall_s, 3),
-                     timed_out=r.timed_out, plc_fault=r.fault,
+                     timed_out=r.timed_out, interrupted=r.interrupted, plc_fault=r.fault,
                      overruns=r.overruns, max_lateness_ms=r.max_lateness_ns / 1e6),
             bus=dict(frames=st.frames if st else 0, frames_in_trace=sum(1 for e in r.trace if e.status != "error"),
                      errors=st.errors if st else 0,
@@ -194,6 +198,19 @@ class Report:
                          f"version {src[2]}.{src[3]}; nothing was written")
         elif ax.error_id == 0x0603:
             extra = f"; read {ax.fail_actual:08X}h, expected {ax.fail_expected:08X}h"
+        elif ax.error_id in (0x0606, 0x0607):
+            limit = "maximum" if ax.error_id == 0x0606 else "minimum"
+            extra = f" (the dataset's value {ax.fail_actual:08X}h, the drive's {limit} {ax.fail_expected:08X}h)"
+        elif ax.error_id == 0x0608:
+            extra = f" (the curves need {ax.fail_actual} bytes, CurveMemory is {ax.fail_expected})"
+        elif ax.error_id == 0x030B:
+            extra = f"; its last NMT state {NMT_STATES.get(ax.fail_actual, f'{ax.fail_actual:02X}h')}"
+        if ax.fail_phase == "flash":
+            if ax.mc_stopped:
+                extra += "; the MC was left stopped (the drive refused to start it again)"
+            else:
+                extra += (f"; reported {ax.fail_delay_ns / 1e6:.1f} ms after the failure, once the MC ran again"
+                          if ax.fail_delay_ns else "")
         phase = PHASE_TITLES.get(ax.fail_phase, ax.fail_phase)
         return f"failed in phase {phase}" + (f", {where}" if where else "") + f": ErrorID {what}{extra}"
 
@@ -253,7 +270,7 @@ class Report:
             f"  dataset: {_n(d['layers'], 'layer')}, {_n(d['parameters'], 'parameter')}, {_n(d['curves'], 'curve')} "
             f"({_n(d['setpoints'], 'setpoint')}), {_n(d['entries'], 'command-table entry', 'command-table entries')}"
             f" = {_n(d['words'], 'word')}",
-            "  options: " + ", ".join(f"{k} {'on' if o[k] else 'off'}" for k in ("live_ram", "flash", "reset", "verify"))
+            "  options: " + ", ".join(f"{k} {'on' if o[k] else 'off'}" for k in ("live_ram", "flash", "reset", "verify", "preflight"))
             + (f", drive timings {o['drive_timings']}" if o["drive_timings"] else ""),
             "",
         ]
@@ -309,6 +326,7 @@ class Report:
             f"{run['wall_s']:.2f} s wall"
             + (f", {run['overruns']} late scans (max {run['max_lateness_ms']:.1f} ms)" if o["bus"] != "sim" else "")
             + (" - TIMED OUT" if run["timed_out"] else "")
+            + (" - INTERRUPTED (Ctrl-C)" if run.get("interrupted") else "")
             + (f" - PLC FAULT: {run['plc_fault']}" if run["plc_fault"] else ""),
             f"bus: {_n(bus['frames'], 'frame')} in that time (the trace holds {bus['frames_in_trace']}, from "
             f"switch-on), busy {bus['busy_ms']:.1f} ms = load {100 * bus['load']:.1f} %"
@@ -350,11 +368,13 @@ class Report:
                 if c.note:
                     lines.append(f"    {c.what}: {c.note}")
         res = f["result"]
-        verdict = "PASSED" if res["passed"] else "FAILED"
+        verdict = "PASSED" if res["passed"] else "INTERRUPTED" if run.get("interrupted") else "FAILED"
         why = []
         if not res["commissioned"]:
             bad = [str(a["node"]) for a in f["axes"] if a["result"] != "done"]
-            if run["plc_fault"]:
+            if run.get("interrupted"):
+                why.append("interrupted (Ctrl-C) before every axis finished")
+            elif run["plc_fault"]:
                 why.append("the PLC faulted")
             elif bad:
                 why.append(f"commissioning failed on node{'s' if len(bad) > 1 else ''} {', '.join(bad)}")
@@ -388,7 +408,7 @@ class Report:
         from .plots import plot_curve
 
         folder = Path(folder)
-        folder.mkdir(parents=True, exist_ok=True)
+        folder.mkdir(exist_ok=True)            # the folder named, not its parents
         for old in [*folder.glob("curve_*.png"), *(folder / f"can.{x}" for x in ("log", "asc", "blf"))]:
             old.unlink(missing_ok=True)
         f = self.figures or self.compute()

@@ -19,7 +19,7 @@ from typing import Any, Callable
 
 from .project import INSTANCE, MAILBOX, MAX_AXES
 
-PHASES = ("idle", "start", "check", "params", "curves", "ct", "flash", "reset", "verify", "done")
+PHASES = ("idle", "wait", "start", "check", "preflight", "params", "curves", "ct", "flash", "reset", "verify", "done")
 
 
 def phase_name(enum_value: str) -> str:
@@ -53,6 +53,9 @@ class RunOptions:
     flash: bool = True
     reset: bool = True
     verify: bool = True
+    preflight: bool = True                     # the FB asks each drive whether it can take the dataset first
+    curve_memory: int | None = None            # bytes of curve memory (CurveMemory); None: the emulated
+                                               # drive's capacity, 0 with real drives (not checked)
     timings: str | None = None                 # "real" | "fast"; default real on sim, fast on real-time buses
     latency_ns: int = 0                        # extra latency of the drives' frames on the simulated bus
     timeout_s: float | None = None             # virtual (sim) or wall seconds; default from the dataset
@@ -111,6 +114,8 @@ class AxisResult:
     drive_layer: tuple[int, int, int] = (0, 0, 0)
     exchanges: int = 0
     live_written: int = 0
+    mc_stopped: bool = False                   # the run left the drive's MC stopped (McStopped)
+    fail_delay_ns: int = 0                     # from the failure to its report (the MC restart; FailDelay)
     up_ns: int | None = None                   # when the PLC first heard the drive
     phases: list[PhaseRecord] = field(default_factory=list)
 
@@ -150,6 +155,7 @@ class RunResult:
     scans: int = 0
     wall_s: float = 0.0
     timed_out: bool = False
+    interrupted: bool = False                  # Ctrl-C ended the run (the report says what was done)
     fault: str = ""                            # a PLC fault (division by zero, index out of range) ended the run
     overruns: int = 0
     max_lateness_ns: int = 0
@@ -169,7 +175,7 @@ class RunResult:
 
     @property
     def commissioned(self) -> bool:
-        return all(a.done for a in self.axes) and not self.timed_out and not self.fault
+        return all(a.done for a in self.axes) and not self.timed_out and not self.fault and not self.interrupted
 
 
 class Sampler:
@@ -244,7 +250,7 @@ class Sampler:
         return phase_name(vs["phase"].value), vs["items"].value, vs["total"].value
 
 
-def _configure(plc, opts: RunOptions, nodes: list[int]) -> None:
+def _configure(plc, opts: RunOptions, nodes: list[int], curve_memory: int = 0) -> None:
     p = INSTANCE
     plc[f"{p}.AXES"] = len(nodes)
     plc[f"{p}.NODEIDS"] = nodes + [0] * (MAX_AXES - len(nodes))
@@ -253,6 +259,8 @@ def _configure(plc, opts: RunOptions, nodes: list[int]) -> None:
     plc[f"{p}.FLASH"] = opts.flash
     plc[f"{p}.RESET"] = opts.reset
     plc[f"{p}.VERIFY"] = opts.verify
+    plc[f"{p}.PREFLIGHT"] = opts.preflight
+    plc[f"{p}.CURVEMEMORY"] = curve_memory
     plc[f"{p}.START"] = True
 
 
@@ -267,12 +275,22 @@ def _collect(plc, sampler: Sampler) -> None:
         dl = c["DRIVELAYER"]
         ax.drive_layer = (dl["TREEID"], dl["MAINVERSION"], dl["SUBVERSION"])
         ax.exchanges, ax.live_written = c["EXCHANGES"], c["LIVEWRITTEN"]
+        ax.mc_stopped, ax.fail_delay_ns = bool(c["MCSTOPPED"]), c["FAILDELAY"]
+
+
+def _curve_memory(opts: RunOptions, drives: dict) -> int:
+    """CurveMemory for the FB: as given; else the smallest curve memory of the emulated drives (what a user
+    reads in the drive's documentation; the E1100 does not tell it over CANopen), 0 without them."""
+    if opts.curve_memory is not None:
+        return opts.curve_memory
+    caps = [getattr(getattr(d, "curves", None), "capacity_bytes", 0) for d in drives.values()]
+    return min(caps) if caps and all(caps) else 0
 
 
 def default_timeout_s(dataset, opts: RunOptions) -> float:
     """Generous: 4 ms per expected exchange, plus the drives' slow services (boot, MC start, flash, reset)."""
     from linmot_st.pvl.dataset import expected_exchanges
-    n = expected_exchanges(dataset, verify=opts.verify, flash=opts.flash)
+    n = expected_exchanges(dataset, verify=opts.verify, flash=opts.flash, preflight=opts.preflight)
     return 4e-3 * n + 60.0
 
 
@@ -322,19 +340,21 @@ def _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, time
     if prepare_bus:
         prepare_bus(bus, drives)
     sim = CoSim(plc, bus, mailbox=MAILBOX, name="plc")
-    _configure(plc, opts, nodes)
+    _configure(plc, opts, nodes, _curve_memory(opts, drives))
     if prepare_plc:
         prepare_plc(plc)
     sampler = Sampler(plc, nodes, progress)
     from linmot_st.plc import PlcFault
     wall0 = time.perf_counter()
-    timed_out, fault = False, ""
+    timed_out, fault, interrupted = False, "", False
     try:
         sim.run_until(sampler, max_scans=int(timeout_s * 1e9 // plc.tick_ns))
     except CoSimTimeout:
         timed_out = True
     except PlcFault as exc:
         fault = str(exc)
+    except KeyboardInterrupt:                  # Ctrl-C: stop, and report what was done so far
+        interrupted = True
     wall = time.perf_counter() - wall0
     sampler.close()
     _collect(plc, sampler)
@@ -342,7 +362,7 @@ def _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, time
     after_result = after(plc, sim, drives) if after is not None and commissioned else None
     res = RunResult(opts, nodes, plc.tick_ns, bus.bit_ns, sampler.axes, list(bus.trace), drives,
                     scans=sim.scans, wall_s=wall, timed_out=timed_out, fault=fault, before=before,
-                    after=after_result)
+                    interrupted=interrupted, after=after_result)
     res.stats = bus.stats(res.t_start_ns, max(res.t_end_ns, res.t_start_ns))
     return res
 
@@ -366,7 +386,8 @@ class _RecordingBus:
 
     def recv(self, timeout=None):
         msg = self.bus.recv(timeout=timeout)
-        if msg is not None and not (msg.is_error_frame or msg.is_extended_id or getattr(msg, "is_fd", False)):
+        if (msg is not None and getattr(msg, "is_rx", True)       # the PLC's own echoes: recorded by send
+                and not (msg.is_error_frame or msg.is_extended_id or getattr(msg, "is_fd", False))):
             self._record(msg, f"node{msg.arbitration_id & 0x7F}")
         return msg
 
@@ -389,9 +410,9 @@ def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s, a
     plc_bus = None
     bit_ns = 1_000_000_000 // opts.bitrate
     try:
-        def opened():
+        def opened(**kwargs):
             try:
-                return open_bus(spec, bitrate=opts.bitrate)
+                return open_bus(spec, bitrate=opts.bitrate, **kwargs)
             except OSError as exc:
                 raise OSError(f"--bus {opts.bus}: cannot open it ({exc}); SocketCAN needs a Linux kernel with "
                               "CAN support and the interface up (docs/bus.md)") from exc
@@ -401,24 +422,32 @@ def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s, a
                 drive_buses.append(opened())
                 drives[n] = factory(n)
         before = {n: drive_state(d) for n, d in drives.items()}
-        plc_bus = _RecordingBus(opened(), time.monotonic_ns(), bit_ns)
+        # the PLC's own frames come back once sent: the mailbox's transmit confirmation (TxEcho), where
+        # the interface can give them
+        try:
+            raw, echo = opened(receive_own_messages=True), True
+        except TypeError:
+            raw, echo = opened(), False
+        plc_bus = _RecordingBus(raw, time.monotonic_ns(), bit_ns)
         for b, d in zip(drive_buses, drives.values()):
             d.attach(b)                                  # switched on now: boots after its boot time
-        sim = RealTimeCoSim(plc, plc_bus, mailbox=MAILBOX)
-        _configure(plc, opts, nodes)
+        sim = RealTimeCoSim(plc, plc_bus, mailbox=MAILBOX, echo=echo)
+        _configure(plc, opts, nodes, _curve_memory(opts, drives))
         if prepare_plc:
             prepare_plc(plc)
         sampler = Sampler(plc, nodes, progress)
         plc_bus.t0 = time.monotonic_ns()                 # trace times = PLC times
         from linmot_st.plc import PlcFault
         wall0 = time.perf_counter()
-        timed_out, fault = False, ""
+        timed_out, fault, interrupted = False, "", False
         try:
             sim.run_until(sampler, timeout_s=timeout_s)
         except CoSimTimeout:
             timed_out = True
         except PlcFault as exc:
             fault = str(exc)
+        except KeyboardInterrupt:              # the drives' threads are stopped below, then the report
+            interrupted = True
         wall = time.perf_counter() - wall0
         sampler.close()
         commissioned = all(a.done for a in sampler.axes) and not timed_out and not fault
@@ -435,6 +464,7 @@ def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s, a
     trace = sorted(plc_bus.records, key=lambda r: r.end_ns)
     res = RunResult(opts, nodes, plc.tick_ns, bit_ns, sampler.axes, trace, drives, scans=sim.scans,
                     wall_s=wall, timed_out=timed_out, fault=fault, overruns=sim.overruns,
-                    max_lateness_ns=sim.max_lateness_ns, before=before, after=after_result)
+                    max_lateness_ns=sim.max_lateness_ns, before=before, interrupted=interrupted,
+                    after=after_result)
     res.stats = bus_stats(trace, bit_ns, res.t_start_ns, max(res.t_end_ns, res.t_start_ns))
     return res

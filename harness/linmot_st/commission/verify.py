@@ -159,11 +159,17 @@ def _unchanged(node: int, before: dict, after: dict) -> Check:
     return c
 
 
-def verify(pvl, drives: dict, opts, *, before: dict | None = None, stopped_in_check: set[int] = frozenset()
+# the phases before the first write: a run that fails in them must leave the drive as it was
+BEFORE_WRITES = {"wait": "while waiting for the drive", "start": "in the dataset header",
+                 "check": "in the compatibility check", "preflight": "in the pre-flight check"}
+
+
+def verify(pvl, drives: dict, opts, *, before: dict | None = None, stopped_before_writes: dict[int, str] | None = None
            ) -> Verification:
     """Compare each emulated drive with the PVL content (see the module docstring). `before`: drive_state()
-    of each node when it was switched on; `stopped_in_check`: nodes whose FB failed in the compatibility
-    check (nothing may have been written to them)."""
+    of each node when it was switched on; `stopped_before_writes`: node -> phase (BEFORE_WRITES) of the nodes
+    whose FB failed before its first write (nothing may have been written to them)."""
+    stopped_before_writes = stopped_before_writes or {}
     v = Verification()
     if not drives:
         v.skipped = "real drives: verified only by the PLC's own VERIFY phase"
@@ -172,13 +178,14 @@ def verify(pvl, drives: dict, opts, *, before: dict | None = None, stopped_in_ch
     entries = {e.entry_id: e.data for e in pvl.command_table}
     has_params = any(obj.parameters for obj in pvl.parameter_objects)
     for node, drive in sorted(drives.items()):
-        if node in stopped_in_check and before and node in before:
+        if node in stopped_before_writes and before and node in before:
+            where = BEFORE_WRITES[stopped_before_writes[node]]
             same = _unchanged(node, before[node], drive_state(drive))
             v.checks.append(same)
             if same.ok:
-                same.note = "nothing written (as intended: the run stopped in the compatibility check)"
+                same.note = f"nothing written (as intended: the run stopped {where})"
                 continue
-            same.note = "the run stopped in the compatibility check, yet the drive changed"
+            same.note = f"the run stopped {where}, yet the drive changed"
         if has_params:
             v.checks += _params(pvl, drive, node, opts)
         stores = ["RAM", "flash"] if opts.flash else ["RAM"]
@@ -197,7 +204,10 @@ def verify(pvl, drives: dict, opts, *, before: dict | None = None, stopped_in_ch
 
 def verify_run(pvl, result) -> Verification:
     """verify() for a runner.RunResult: its emulated drives, their state when switched on, and the axes whose
-    FB stopped in the compatibility check."""
+    FB stopped before its first write."""
     opts = result.options
-    stopped = {a.node_id for a in result.axes if a.error and a.fail_phase == "check"}
-    return verify(pvl, result.drives if opts.emulate else {}, opts, before=result.before, stopped_in_check=stopped)
+    early = [a for a in result.axes if a.error and a.fail_phase in BEFORE_WRITES]
+    others = {a.node_id for a in result.axes if a not in early}      # another axis on the node may write
+    stopped = {a.node_id: a.fail_phase for a in early if a.node_id not in others}
+    return verify(pvl, result.drives if opts.emulate else {}, opts, before=result.before,
+                  stopped_before_writes=stopped)

@@ -7,29 +7,33 @@ import sys
 
 
 def register(subparsers) -> None:
+    from ..cliargs import can_bitrate, int_range, non_negative_seconds
+
     p = subparsers.add_parser(
         "emulate", help="serve an emulated LinMot E1100 (CANopen) on a python-can bus",
         description="Serve an emulated LinMot E1100 CANopen drive on any python-can bus in real time, "
                     "e.g. --interface socketcan --channel vcan0, until Ctrl-C or SIGTERM.")
     p.add_argument("--interface", required=True, help="python-can interface (socketcan, virtual, pcan, ...)")
     p.add_argument("--channel", required=True, help="python-can channel (vcan0, can0, a virtual channel name)")
-    p.add_argument("--node-id", type=int, default=1, help="CANopen node ID 1..127 (default 1)")
-    p.add_argument("--bitrate", type=int, default=500_000,
+    p.add_argument("--node-id", type=int_range(1, 127), default=1, help="CANopen node ID 1..127 (default 1)")
+    p.add_argument("--bitrate", type=can_bitrate, default=500_000,
                    help="bit rate in bit/s (default 500000, the E1100 default; SocketCAN: set with `ip link`)")
     p.add_argument("--profile", help="drive profile JSON (default: the seeds' example drive)")
     p.add_argument("--fast", action="store_true", help="short boot/MC/flash durations (for demos and tests)")
-    p.add_argument("--duration", type=float, help="stop after this many seconds (default: until interrupted)")
+    p.add_argument("--duration", type=non_negative_seconds,
+                   help="stop after this many seconds (default: until interrupted)")
     p.set_defaults(func=run)
-
-
-def _error(message: str, rc: int) -> int:
-    print(f"error: {message}", file=sys.stderr, flush=True)
-    return rc
 
 
 def run(args: argparse.Namespace) -> int:
     """Exit status 0 when stopped (duration, Ctrl-C, SIGTERM), 2 for bad arguments, 1 when the bus
-    cannot be opened or the drive fails while serving."""
+    cannot be opened or the drive fails while serving. On stopping it says what it served."""
+    from ..cliargs import error
+
+    def _error(message: str, rc: int) -> int:
+        error(args, message)
+        return rc
+
     import signal
     import threading
     import time
@@ -42,12 +46,6 @@ def run(args: argparse.Namespace) -> int:
 
     spec = f"{args.interface}:{args.channel}"
     try:
-        if not 1 <= args.node_id <= 127:
-            raise ValueError(f"--node-id {args.node_id}: outside 1..127")
-        if args.bitrate <= 0:
-            raise ValueError(f"--bitrate {args.bitrate}: must be a positive number of bit/s")
-        if args.duration is not None and args.duration < 0:
-            raise ValueError(f"--duration {args.duration}: must be >= 0")
         parse_bus_spec(spec, where=f"--interface {args.interface} --channel {args.channel}")
         profile = load_profile(args.profile) if args.profile else None
     except ProfileError as exc:
@@ -64,13 +62,16 @@ def run(args: argparse.Namespace) -> int:
 
     stop = threading.Event()
     old_handler = None
-    if threading.current_thread() is threading.main_thread():   # signal handlers live in the main thread only
-        old_handler = signal.signal(signal.SIGTERM, lambda signum, frame: stop.set())
-    print(f"E1100 node {args.node_id} on {args.interface}:{args.channel} "
-          f"(boot-up after {drive.timings.boot_ns / 1e9:g} s); Ctrl-C stops", flush=True)
     rc = 0
-    try:
+    t0 = time.monotonic()
+    served = None
+    try:                                            # from here on Ctrl-C, wherever it comes, ends in the report
+        if threading.current_thread() is threading.main_thread():   # signal handlers: main thread only
+            old_handler = signal.signal(signal.SIGTERM, lambda signum, frame: stop.set())
         drive.attach(bus)
+        served = drive._server
+        print(f"E1100 node {args.node_id} on {args.interface}:{args.channel} "
+              f"(boot-up after {drive.timings.boot_ns / 1e9:g} s); Ctrl-C stops", flush=True)
         deadline = None if args.duration is None else time.monotonic() + args.duration
         while not stop.is_set() and (deadline is None or time.monotonic() < deadline):
             stop.wait(0.05 if deadline is None else max(0.0, min(0.05, deadline - time.monotonic())))
@@ -84,5 +85,7 @@ def run(args: argparse.Namespace) -> int:
         bus.shutdown()
         if old_handler is not None:
             signal.signal(signal.SIGTERM, old_handler)
-    print(f"E1100 node {args.node_id} stopped in NMT state {drive.nmt_state}", flush=True)
+    done = (f" after {time.monotonic() - t0:.1f} s: {served.frames_received} frames received, "
+            f"{served.frames_sent} sent" if served is not None else "")
+    print(f"E1100 node {args.node_id} stopped in NMT state {drive.nmt_state}{done}", flush=True)
     return rc

@@ -26,7 +26,8 @@ def _add_st(p: argparse.ArgumentParser) -> None:
 def _add_plcopen(p: argparse.ArgumentParser) -> None:
     p.add_argument("out", metavar="OUT.xml", help="file to write, or - for standard output")
     _add_common(p)
-    p.add_argument("--schema", metavar="XSD", default=None,
+    from ..cliargs import existing_file
+    p.add_argument("--schema", metavar="XSD", default=None, type=existing_file("schema"),
                    help="validate the result against this XSD (e.g. PLCopen's tc6_xml_v201.xsd) before writing")
     p.add_argument("--no-plaintext-interface", dest="plaintext", action="store_false",
                    help="leave out the declarations as written (CODESYS's interfaceasplaintext addData)")
@@ -42,13 +43,13 @@ def write_output(out: str, data: bytes) -> str:
         sys.stdout.buffer.write(data)
         sys.stdout.flush()
         return "<stdout>"
+    from ..cliargs import UsageError, check_output_file
     path = Path(out).expanduser()
-    if path.is_dir():
-        raise _WriteError(f"{out}: is a folder; give a file name")
+    try:
+        check_output_file(out, out)
+    except UsageError as exc:
+        raise _WriteError(str(exc)) from None
     folder = path.parent if str(path.parent) else Path(".")
-    if not folder.is_dir():
-        raise _WriteError(f"{out}: {folder} is not a folder" if folder.exists()
-                          else f"{out}: folder {folder} does not exist")
     try:
         fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=folder)
     except OSError as exc:
@@ -84,37 +85,46 @@ def _report(out: str, message: str) -> None:
     print(message, file=sys.stderr if out == "-" else sys.stdout)
 
 
+def _check_out(args: argparse.Namespace) -> None:
+    """The output checked before any work (a UsageError: exit 2)."""
+    from ..cliargs import check_output_file
+    if args.out != "-":
+        check_output_file(args.out, args.out)
+
+
 def _run_st(args: argparse.Namespace) -> int:
+    from ..cliargs import error
     from .library import ExportError
     from .st import export_st
 
+    _check_out(args)
     try:
         result = export_st(args.entry)
         data = result.text.encode("utf-8")
         name = write_output(args.out, data)
     except (ExportError, _WriteError) as exc:
-        print(f"linmot-st export st: {exc}", file=sys.stderr)
+        error(args, str(exc))
         return 1
     _report(args.out, _summary(result.library, name, data))
     return 0
 
 
 def _run_plcopen(args: argparse.Namespace) -> int:
+    from ..cliargs import error
     from .library import ExportError
     from .plcopen import export_plcopen, validate
 
+    _check_out(args)
     try:
         data, lib = export_plcopen(args.entry, plaintext_interfaces=args.plaintext)
         if args.schema:
-            if not Path(args.schema).is_file():
-                raise _WriteError(f"{args.schema}: no such schema file")
             errors = validate(data, args.schema)
             if errors:
                 raise ExportError(f"the XML does not validate against {args.schema} (nothing written):\n"
                                   + "\n".join(errors[:20]))
         name = write_output(args.out, data)
     except (ExportError, _WriteError) as exc:
-        print(f"linmot-st export plcopen: {exc}", file=sys.stderr)
+        error(args, str(exc))
         return 1
     message = _summary(lib, name, data)
     if args.schema:

@@ -40,6 +40,7 @@ def command_line(args: argparse.Namespace) -> str:
 def run_command(args: argparse.Namespace) -> int:
     from pathlib import Path
 
+    from linmot_st.cliargs import error
     from linmot_st.commission.cli import commission_report, prepare_run, write_outputs
     from linmot_st.commission.progress import Progress
 
@@ -64,14 +65,14 @@ def run_command(args: argparse.Namespace) -> int:
                          motion_progress=None if args.quiet else MotionProgress(err),
                          timeout_s=args.timeout or 120.0)
     except (ValueError, OSError) as e:
-        print(f"error: {e}", file=err)
+        error(args, str(e))
         return 2
     finally:
         if progress:
             progress.close()
     report = commission_report(args, prep, result, command_line(args))
     sys.stdout.write(report.text())
-    status = 0 if report.figures["result"]["passed"] else 1
+    status = 0 if report.figures["result"]["passed"] else 130 if result.interrupted else 1
     motion = None
     if result.after is not None:
         check = check_motion(result.after, plan, result.drives)
@@ -88,7 +89,7 @@ def run_command(args: argparse.Namespace) -> int:
         try:
             files = motion.write(Path(args.report))
         except OSError as e:
-            print(f"error: --report {args.report}: {e.strerror or e}", file=err)
+            error(args, f"--report {args.report}: {e.strerror or e}")
             return 1
         print(f"motion report: {', '.join(str(f) for f in files)}")
     return status

@@ -11,6 +11,7 @@ FAULT_KINDS = {
     2: "array index out of range",
     3: "arithmetic fault",
     4: "fatal signal",
+    5: "scan watchdog: the scan ran longer than the watchdog allows",
 }
 
 

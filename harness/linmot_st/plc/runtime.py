@@ -20,7 +20,7 @@ from .faults import PlcFault, locate_with_debug_info
 from .layout import Layout, LayoutError
 from .variable import Var, make_var
 
-ABI_VERSION = 1
+ABI_VERSION = 2
 
 _ABI = {
     "plc_abi_version": ([], ctypes.c_int),
@@ -37,6 +37,8 @@ _ABI = {
     "plc_set_time_ns": ([ctypes.c_ulonglong], None),
     "plc_tick_ns": ([], ctypes.c_ulonglong),
     "plc_scan_count": ([], ctypes.c_ulonglong),
+    "plc_set_watchdog_ns": ([ctypes.c_ulonglong], None),
+    "plc_watchdog_ns": ([], ctypes.c_ulonglong),
 }
 
 
@@ -134,6 +136,10 @@ class Plc:
             if found:
                 pou, file, line = found
                 file = self._source_name(file)
+        if file.endswith(".c"):
+            # a position in generated C (the builtin backend's C has no #line): name the POU's ST file
+            info = {k.upper(): v for k, v in self.manifest.get("pous", {}).items()}.get(pou.upper(), {})
+            file, line = info.get("file", ""), 0
         raise PlcFault(kind, pou, file, line, pc, int(self._lib.plc_scan_count()) + 1)
 
     def _source_name(self, file: str) -> str:
@@ -163,6 +169,18 @@ class Plc:
     @property
     def scan_count(self) -> int:
         return int(self._lib.plc_scan_count())
+
+    @property
+    def watchdog_ns(self) -> int:
+        """The scan watchdog: CPU time one scan may take before it ends as a PlcFault (kind 5); 0 = off.
+        Default 1 s (docs/toolchain.md)."""
+        return int(self._lib.plc_watchdog_ns())
+
+    @watchdog_ns.setter
+    def watchdog_ns(self, ns: int) -> None:
+        if ns < 0:
+            raise ValueError(f"watchdog {ns} ns: must be >= 0 (0 turns it off)")
+        self._lib.plc_set_watchdog_ns(int(ns))
 
     # ---- variables -------------------------------------------------------------------------------------
 

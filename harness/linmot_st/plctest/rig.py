@@ -220,13 +220,14 @@ class Rig:
     bitrate, timings ('real', 'fast' or DriveTimings), protocol (ProtocolOptions), profile (DriveProfile),
     latency_ns (added to the drives' frames), drive_factory(node_id) -> node (replaces all of those),
     power_on (switch the drives on at t = 0), mailbox (the PLC's T_CanMailbox; None or absent: no bus
-    coupling, the PLC runs alone).
+    coupling, the PLC runs alone), echo (the transmit confirmation of the co-simulation, linmot_st.cosim:
+    None on where the mailbox has TxEcho, False for a CAN driver without one).
     """
 
     def __init__(self, build: Any, *, nodes: tuple[int, ...] | list[int] = (1,), bitrate: int = 500_000,
                  timings: Any = "real", protocol: Any = None, profile: Any = None, latency_ns: int = 0,
                  drive_factory: Callable[[int], Any] | None = None, power_on: bool = True,
-                 mailbox: str | None = MAILBOX, watch: list[str] | tuple = ()):
+                 mailbox: str | None = MAILBOX, watch: list[str] | tuple = (), echo: bool | None = None):
         from linmot_st.bus import SimBus
         from linmot_st.cosim import CoSim
         from linmot_st.emulator import E1100Drive
@@ -243,7 +244,8 @@ class Rig:
             if power_on:
                 drive.power_on(0)
             self.drives[n] = drive
-        self.sim = CoSim(self.plc, self.bus, mailbox=mailbox) if mailbox and mailbox in self.plc else None
+        self.sim = (CoSim(self.plc, self.bus, mailbox=mailbox, echo=echo)
+                    if mailbox and mailbox in self.plc else None)
         self.watched: list[str] = list(watch)
         self.faults: list[InjectedFault] = []
         self._armed: list[InjectedFault] = []

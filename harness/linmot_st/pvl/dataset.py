@@ -95,7 +95,10 @@ def encode(pvl) -> list[int]:
     words += [TAG_END << 24, 0]
     if len(words) > MAX_WORDS:
         raise DatasetError(f"{name}: the dataset needs {len(words)} words; the generator's limit is {MAX_WORDS} "
-                           "(1 MiB): split the file")
+                           "(1 MiB). A commissioning run replaces all of a drive's curves and all of its "
+                           "command-table entries, so they cannot be split over two files: keep them in one "
+                           "and move parameter objects into a second file (a file without curves or entries "
+                           "leaves them as they are)")
     words[3] = len(words)
     return words
 
@@ -161,10 +164,15 @@ def from_pvl(pvl) -> Dataset:
     return decode(encode(pvl))
 
 
-def expected_exchanges(ds: Dataset, *, verify: bool = True, flash: bool = True) -> int:
-    """SDO exchanges of a commissioning run that succeeds (flash polls, the reset request and the ROM-only
-    retries of non-live parameters under LiveRam not counted: they depend on the drive)."""
+PREFLIGHT_EXCHANGES = 4    # per parameter row: UPID list start (20h) and next (21h), min (03h), max (04h)
+
+
+def expected_exchanges(ds: Dataset, *, verify: bool = True, flash: bool = True, preflight: bool = True) -> int:
+    """SDO exchanges of a commissioning run that succeeds (flash polls, the reset request, the NMT check after
+    it and the ROM-only retries of non-live parameters under LiveRam not counted: they depend on the drive)."""
     n = 3 * len(ds.layers) + len(ds.params)
+    if preflight:
+        n += PREFLIGHT_EXCHANGES * len(ds.params)
     n += (1 if ds.curves else 0) + sum(1 + INFO_WORDS + len(p) for _, _, p in ds.curves)
     n += (1 if ds.entries else 0) + 33 * len(ds.entries)
     if flash and (ds.curves or ds.entries):

@@ -141,21 +141,27 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..cliargs import check_output_file, error
     from .cli import load_or_report
 
+    if args.output != "-":
+        check_output_file(args.output, f"-o {args.output}")       # before any work; no folder is created
     pvl = load_or_report(args.file)
     if pvl is None:
         return 1
     try:
         text = to_st(pvl, args.type_name)
     except (ds_format.DatasetError, ValueError) as err:
-        print(f"error: {err}", file=sys.stderr)
+        error(args, str(err))
         return 1
     if args.output == "-":
         sys.stdout.write(text)
     else:
         out = Path(args.output)
-        out.parent.mkdir(parents=True, exist_ok=True)
-        out.write_text(text)
+        try:
+            out.write_text(text)
+        except OSError as exc:
+            error(args, f"-o {args.output}: {exc.strerror or exc}")
+            return 1
         print(f"{out}: {args.type_name}, {len(read_st(text)[1])} words", file=sys.stderr)
     return 0

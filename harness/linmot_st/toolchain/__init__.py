@@ -287,7 +287,7 @@ def _builtin_generate(src: _sources.Sources, c_dir: Path) -> tuple[dict, list[Pa
 
 def _export(result: BuildResult, out: Path) -> BuildResult:
     """Copy the library, its manifest and the generated C into `out`."""
-    out.mkdir(parents=True, exist_ok=True)
+    out.mkdir(exist_ok=True)                  # the folder named, not its parents (checked by the CLI)
     shutil.copyfile(result.library, out / result.library.name)
     shutil.copyfile(result.manifest, out / result.manifest.name)
     if result.c_dir and result.c_dir.is_dir():

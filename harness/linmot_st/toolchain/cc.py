@@ -22,7 +22,7 @@ GLUE_SOURCES = [GLUE_DIR / "plc_glue.c"]
 # -g: the line table lets a fault's address be mapped back to its POU and ST line
 BASE_FLAGS = ["-O1", "-g1", "-fPIC", "-Wno-unused-function", "-fno-strict-aliasing"]
 # -z defs: a symbol the generated C uses but never defines fails the link, not the later dlopen
-LINK_FLAGS = ["-shared", "-Wl,-z,defs", "-lm", "-ldl", "-lpthread"]
+LINK_FLAGS = ["-shared", "-Wl,-z,defs", "-lm", "-ldl", "-lpthread", "-lrt"]   # -lrt: timer_create (glibc < 2.34)
 
 
 class CCompileError(Exception):

@@ -4,6 +4,11 @@ from __future__ import annotations
 
 import argparse
 import sys
+import time
+
+from ..cliargs import int_range, non_negative_seconds
+
+RUN_CHUNK_S = 0.05      # `run` steps in C for about this long between two checks for Ctrl-C
 
 
 def register(subparsers) -> None:
@@ -19,13 +24,16 @@ def register(subparsers) -> None:
                               description="Build (cached), load and run the PLC scan by scan in virtual time, "
                                           "then print the watched variables.")
     _common(r)
-    r.add_argument("--cycles", type=int, required=True, metavar="N", help="scans to run")
-    r.add_argument("--watch", nargs="+", default=[], metavar="VAR",
-                   help="IEC paths to print (a unique suffix is enough, e.g. INST0.X)")
+    r.add_argument("--cycles", type=int_range(0), required=True, metavar="N", help="scans to run")
+    r.add_argument("--watch", nargs="+", action="extend", default=[], metavar="VAR",
+                   help="IEC paths to print (a unique suffix is enough, e.g. INST0.X); repeatable")
     r.add_argument("--set", action="append", default=[], metavar="VAR=VALUE",
                    help="write a variable before the first scan (repeatable); VALUE is a Python literal")
-    r.add_argument("--every", type=int, default=0, metavar="K",
+    r.add_argument("--every", type=int_range(0), default=0, metavar="K",
                    help="also print the watched variables every K scans")
+    r.add_argument("--watchdog", type=non_negative_seconds, default=1.0, metavar="S",
+                   help="a scan that takes more than S seconds of CPU time ends the run as a PLC fault naming "
+                        "its POU (default 1; 0 = off)")
     r.set_defaults(func=cmd_run)
 
 
@@ -59,7 +67,8 @@ def _build(args, out=None, use_cache=True):
     try:
         res = build(args.path, backend=args.backend, out=out, use_cache=use_cache, root=args.root)
     except OSError as exc:      # the cache or output folder cannot be written, a source cannot be read...
-        print(f"error: {exc}", file=sys.stderr)
+        from ..cliargs import error
+        error(args, str(exc))
         raise _Failed(1) from None
     except CompileError as exc:
         for line in exc.diagnostics:
@@ -76,6 +85,9 @@ def _build(args, out=None, use_cache=True):
 
 
 def cmd_build(args) -> int:
+    if args.out:
+        from ..cliargs import check_output_folder
+        check_output_folder(args.out, f"--out {args.out}")
     try:
         res = _build(args, out=args.out, use_cache=not args.no_cache)
     except _Failed as failed:
@@ -96,44 +108,52 @@ def _parse_value(text: str):
 
 
 def cmd_run(args) -> int:
+    from ..cliargs import UsageError, error
     from ..plc import PathError, Plc, PlcFault
-    if args.cycles < 0:
-        print("error: --cycles must be >= 0", file=sys.stderr)
-        return 2
+    for item in args.set:
+        if "=" not in item:
+            raise UsageError(f"--set {item!r}: expected VAR=VALUE")
     try:
         res = _build(args)
     except _Failed as failed:
         return failed.code
     plc = Plc(res)
+    plc.watchdog_ns = int(args.watchdog * 1e9)
     try:
         watched = [plc.var(w) for w in args.watch]
         for item in args.set:
-            name, sep, value = item.partition("=")
-            if not sep:
-                print(f"error: --set {item!r}: expected VAR=VALUE", file=sys.stderr)
-                return 2
+            name, _, value = item.partition("=")
             plc[name.strip()] = _parse_value(value.strip())
     except (PathError, TypeError, ValueError) as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
+        raise UsageError(str(exc)) from None
 
     def show() -> None:
         print(f"scan {plc.scan_count}  t = {plc.time_ns / 1e6:g} ms")
         for v in watched:
             print(f"  {v.path} = {v.value!r}")
 
+    # scans go in chunks of about RUN_CHUNK_S, so that Ctrl-C (KeyboardInterrupt, raised between two calls
+    # into C) stops the run promptly; a scan that never ends is the watchdog's
+    done, chunk, next_show = 0, 100, args.every or None
     try:
-        done = 0
-        step = args.every if args.every > 0 else args.cycles
         while done < args.cycles:
-            n = min(step, args.cycles - done)
+            n = min(chunk, args.cycles - done, (next_show - done) if next_show else args.cycles)
+            t0 = time.perf_counter()
             plc.step(n)
             done += n
-            if args.every > 0 and done < args.cycles:
-                show()
+            spent = time.perf_counter() - t0
+            chunk = max(1, min(1_000_000, int(chunk * RUN_CHUNK_S / spent) if spent > 0 else chunk * 2))
+            if next_show and done == next_show:
+                if done < args.cycles:
+                    show()
+                next_show += args.every
     except PlcFault as fault:
-        print(str(fault), file=sys.stderr)
+        error(args, str(fault))
         show()
         return 3
+    except KeyboardInterrupt:
+        error(args, f"interrupted after {plc.scan_count} of {args.cycles} scans")
+        show()
+        return 130
     show()
     return 0

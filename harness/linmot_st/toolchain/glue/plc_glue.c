@@ -13,6 +13,14 @@
  * signal, raised by this thread inside plc_step/plc_init, into a siglongjmp back to the loop. A signal
  * raised anywhere else is passed on to the handler that was installed before ours (pytest's
  * faulthandler, Python's default, or another PLC instance's glue).
+ *
+ * Scan watchdog. A scan that never ends (WHILE TRUE DO ... END_WHILE) would hold the process forever, as
+ * a real PLC runtime's task watchdog prevents. While plc_step runs, a POSIX timer on the CPU clock of the
+ * calling thread ticks every limit / WD_TICKS (a real-time signal sent to that thread, identified by its
+ * value, so that several PLC instances and other users of the signal do not mix); a tick that finds the
+ * scan count unchanged for WD_TICKS ticks ends the scan like a fault: kind 5, located at the interrupted
+ * instruction. The CPU clock, not the wall clock: a loaded machine does not trip it, a spinning scan
+ * does. The limit is per scan and 0 turns it off (plc_set_watchdog_ns).
  */
 #define _GNU_SOURCE
 #include <dlfcn.h>
@@ -21,9 +29,13 @@
 #include <signal.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/syscall.h>
+#include <time.h>
 #include <ucontext.h>
+#include <unistd.h>
 
-#define PLC_ABI_VERSION 1
+#define PLC_ABI_VERSION 2
+#define WD_TICKS 4
 
 typedef struct { long tv_sec; long tv_nsec; } plc_iec_time_t;   /* MatIEC's IEC_TIME */
 
@@ -54,6 +66,17 @@ static sigjmp_buf scan_jmp;
 static const int caught_signals[N_SIGNALS] = {SIGFPE, SIGILL, SIGSEGV, SIGBUS};
 static struct sigaction previous[N_SIGNALS];
 static int handlers_installed;
+
+/* the scan watchdog */
+static unsigned long long watchdog_ns = 1000000000ULL;   /* CPU time per scan; 0 = off */
+static int wd_signal;                                   /* SIGRTMIN + 4 (SIGRTMIN is not a constant) */
+static struct sigaction wd_previous;
+static timer_t wd_timer;
+static int wd_timer_ok;
+static pid_t wd_tid;                                    /* the thread whose CPU clock the timer follows */
+static int wd_token;                                    /* its address tells our timer's signal */
+static volatile unsigned long long wd_seen;
+static volatile int wd_stuck;
 
 __attribute__((visibility("default"))) int plc_abi_version(void) { return PLC_ABI_VERSION; }
 
@@ -142,6 +165,30 @@ static void chain(int index, int sig, siginfo_t *info, void *ctx)
     if (info && info->si_code <= 0) raise(sig);   /* sent by kill(), not a fault: re-send it */
 }
 
+static void on_watchdog(int sig, siginfo_t *info, void *ctx)
+{
+    if (info && info->si_code == SI_TIMER && info->si_value.sival_ptr == (void *)&wd_token) {
+        if (!in_scan || !pthread_equal(pthread_self(), scan_thread)) return;   /* a tick between scans */
+        if (plc_scans != wd_seen) {
+            wd_seen = plc_scans;
+            wd_stuck = 0;
+            return;
+        }
+        if (++wd_stuck < WD_TICKS) return;
+        fault_kind = 5;
+        locate_pc(context_pc(ctx));
+        in_scan = 0;
+        siglongjmp(scan_jmp, 1);
+    }
+    /* another instance's timer, or another user of the signal: pass it on; never to the default action
+       (it would end the process) */
+    if (wd_previous.sa_flags & SA_SIGINFO) {
+        if (wd_previous.sa_sigaction) wd_previous.sa_sigaction(sig, info, ctx);
+    } else if (wd_previous.sa_handler != SIG_DFL && wd_previous.sa_handler != SIG_IGN) {
+        wd_previous.sa_handler(sig);
+    }
+}
+
 static void on_signal(int sig, siginfo_t *info, void *ctx)
 {
     int index = 0;
@@ -164,8 +211,54 @@ static void install_handlers(void)
     sa.sa_flags = SA_SIGINFO | SA_NODEFER | SA_ONSTACK;
     sigemptyset(&sa.sa_mask);
     for (int i = 0; i < N_SIGNALS; i++) sigaction(caught_signals[i], &sa, &previous[i]);
+    wd_signal = SIGRTMIN + 4;
+    sa.sa_sigaction = on_watchdog;
+    sigaction(wd_signal, &sa, &wd_previous);
     handlers_installed = 1;
 }
+
+/* the watchdog timer of the calling thread's CPU clock, created on first use (again for another thread) */
+static int watchdog_timer(void)
+{
+    pid_t tid = (pid_t)syscall(SYS_gettid);
+    if (wd_timer_ok && wd_tid == tid) return 1;
+    if (wd_timer_ok) {
+        timer_delete(wd_timer);
+        wd_timer_ok = 0;
+    }
+    struct sigevent sev;
+    memset(&sev, 0, sizeof sev);
+    sev.sigev_notify = SIGEV_THREAD_ID;
+#ifdef sigev_notify_thread_id
+    sev.sigev_notify_thread_id = tid;
+#else
+    sev._sigev_un._tid = tid;
+#endif
+    sev.sigev_signo = wd_signal;
+    sev.sigev_value.sival_ptr = (void *)&wd_token;
+    if (timer_create(CLOCK_THREAD_CPUTIME_ID, &sev, &wd_timer) != 0) return 0;
+    wd_timer_ok = 1;
+    wd_tid = tid;
+    return 1;
+}
+
+static void watchdog_arm(int on)
+{
+    struct itimerspec its;
+    memset(&its, 0, sizeof its);
+    if (on) {
+        unsigned long long tick = watchdog_ns / WD_TICKS;
+        if (tick < 1000000ULL) tick = 1000000ULL;        /* at most a tick per ms of CPU */
+        its.it_value.tv_sec = its.it_interval.tv_sec = (time_t)(tick / 1000000000ULL);
+        its.it_value.tv_nsec = its.it_interval.tv_nsec = (long)(tick % 1000000000ULL);
+        wd_seen = plc_scans;
+        wd_stuck = 0;
+    }
+    timer_settime(wd_timer, 0, &its, NULL);
+}
+
+__attribute__((visibility("default"))) void plc_set_watchdog_ns(unsigned long long ns) { watchdog_ns = ns; }
+__attribute__((visibility("default"))) unsigned long long plc_watchdog_ns(void) { return watchdog_ns; }
 
 /* Called by code of the builtin backend at a checked fault; does not return. Outside a scan (which
  * cannot happen for generated code) it records the fault and returns to nothing: abort is the only
@@ -208,6 +301,9 @@ __attribute__((visibility("default"))) unsigned long plc_step(unsigned long n)
     const unsigned long long start = plc_scans;
     if (fault_kind) return 0;   /* a faulted PLC stays stopped until plc_init */
     scan_thread = pthread_self();
+    install_handlers();
+    const int watched = watchdog_ns && watchdog_timer();
+    if (watched) watchdog_arm(1);
     if (sigsetjmp(scan_jmp, 1) == 0) {
         in_scan = 1;
         const long tick_ns = (long)common_ticktime__;
@@ -224,6 +320,7 @@ __attribute__((visibility("default"))) unsigned long plc_step(unsigned long n)
         }
     }
     in_scan = 0;
+    if (watched) watchdog_arm(0);
     return (unsigned long)(plc_scans - start);
 }
 
