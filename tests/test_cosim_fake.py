@@ -230,6 +230,24 @@ def test_real_time_cosim_step_paces_scans():
         assert sim.scans == 11 and plc.time_ns == 55_000_000
 
 
+def test_real_time_cosim_overrun_moves_the_plc_clock_to_the_wall_clock():
+    # the third scan takes 3.5 ticks (the clock jumps while it runs): the next scan starts 2.5 ticks late,
+    # at the wall time, so the PLC's clock (its timers, its SDO timeouts) never falls behind real time
+    extra = [0]
+
+    def program(plc):
+        if plc.scan_count == 2:
+            extra[0] += 35_000_000
+
+    plc = FakePlc(program, tick_ns=10 * TICK)   # 10 ms ticks: host jitter stays far below one tick
+    with open_bus(f"virtual:linmot-st-test-{uuid.uuid4().hex}") as bus:
+        sim = RealTimeCoSim(plc, bus, mailbox=MB, clock=lambda: time.monotonic_ns() + extra[0])
+        sim.step(6)
+    assert sim.scans == 6 and sim.overruns == 1 and sim.skipped_ticks == 2
+    assert 25_000_000 <= sim.max_lateness_ns < 40_000_000
+    assert plc.time_ns == (6 + 2) * 10 * TICK            # every scan a tick, and the two missed ones
+
+
 @pytest.mark.parametrize("count", [33, 100, -1])
 def test_tx_count_outside_the_mailbox_is_an_error(count):
     # no driver could send Tx[33..]: an error that names the mailbox and the count, not a silent truncation

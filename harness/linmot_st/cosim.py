@@ -188,8 +188,10 @@ class RealTimeCoSim:
     """A PLC stepped against the wall clock on a python-can bus (its own thread: the caller's).
 
     Scan k of a `step`/`run_until` call starts when the wall clock has advanced as far as the PLC's
-    clock since the call began; the frames received meanwhile go into Rx. A scan that starts late
-    counts as an overrun (`overruns`, `max_lateness_ns`); later scans are not skipped.
+    clock since the call began; the frames received meanwhile go into Rx. A scan that starts a tick or
+    more late is an overrun (`overruns`, `max_lateness_ns`): it still runs, but at the wall time (the
+    PLC's clock moves on by the whole ticks missed, `skipped_ticks`), so that the PLC's timers and
+    timeouts keep real time on a machine too slow for the task, as on a PLC whose task overran.
     """
 
     def __init__(self, plc: Any, can_bus: Any, mailbox: str = "CONFIG0.RES0.CAN0", *,
@@ -203,25 +205,35 @@ class RealTimeCoSim:
         self.frames_received = 0
         self.rx_dropped = 0
         self.send_errors = 0
-        self.overruns = 0
+        self.overruns = 0             # scans that started one tick or more after their due time
         self.max_lateness_ns = 0
+        self.skipped_ticks = 0        # task activations missed by those scans (the PLC clock moved on)
         self._pending: list[Frame] = []
 
-    def _collect(self, until_wall_ns: int) -> None:
+    def _collect(self, until_wall_ns: int) -> int:
+        """Receive into the pending frames until the wall clock reaches `until_wall_ns`; returns the wall
+        time then. A scan already due only drains what has arrived (no clock read per frame: on a machine
+        where a system call is dear, such as User-Mode Linux, the clock is read once)."""
         bus, pending, clock = self.can_bus, self._pending, self.clock
+        now = clock()
         while True:
-            remaining = until_wall_ns - clock()
+            remaining = until_wall_ns - now
             msg = bus.recv(timeout=remaining / 1e9 if remaining > 0 else 0)
             if msg is None:
-                if clock() >= until_wall_ns:
-                    return
+                if remaining <= 0:
+                    return now
+                now = clock()
+                if now >= until_wall_ns:
+                    return now
                 continue
-            if msg.is_error_frame or msg.is_extended_id or getattr(msg, "is_fd", False):
-                continue
-            pending.append(Frame.from_message(msg))
+            if not (msg.is_error_frame or msg.is_extended_id or getattr(msg, "is_fd", False)):
+                pending.append(Frame.from_message(msg))
+            if remaining > 0:
+                now = clock()
 
     def _scans(self, n: int | None, predicate: Callable[[], bool] | None, timeout_s: float | None) -> int:
-        plc, mb = self.plc, self.mailbox
+        plc, mb, send = self.plc, self.mailbox, self.can_bus.send
+        tick = plc.tick_ns
         wall0, plc0 = self.clock(), plc.time_ns
         wall_end = None if timeout_s is None else wall0 + int(timeout_s * 1e9)
         k = 0
@@ -231,11 +243,16 @@ class RealTimeCoSim:
             due = wall0 + (plc.time_ns - plc0)
             if wall_end is not None and due > wall_end:
                 break
-            self._collect(due)
-            late = self.clock() - due
-            if late > plc.tick_ns:
+            late = self._collect(due) - due
+            if late > self.max_lateness_ns:
+                self.max_lateness_ns = late
+            if late >= tick:
+                # an overrun: the PLC's clock keeps real time (its timers and timeouts measure the wall
+                # clock, as on a PLC whose task overran), so this scan runs at the wall time in whole ticks
                 self.overruns += 1
-            self.max_lateness_ns = max(self.max_lateness_ns, late)
+                missed = late // tick
+                self.skipped_ticks += missed
+                plc.time_ns = plc.time_ns + missed * tick
             frames, self._pending = self._pending, []
             self.frames_received += len(frames)
             self.rx_dropped += mb.write_rx(frames)
@@ -244,7 +261,7 @@ class RealTimeCoSim:
             k += 1
             for f in mb.take_tx():
                 try:
-                    self.can_bus.send(f.to_message(timestamp=time.time()))
+                    send(f.to_message())
                     self.frames_sent += 1
                 except Exception:  # noqa: BLE001 - a full Tx queue loses the frame, like a PLC driver would
                     self.send_errors += 1

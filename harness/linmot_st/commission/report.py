@@ -149,7 +149,7 @@ class Report:
             run=dict(start_ms=r.t_start_ns / 1e6, end_ms=r.t_end_ns / 1e6, time_ms=span / 1e6,
                      exchanges=total_ex, necessary_exchanges=need, scans=r.scans, wall_s=round(r.wall_s, 3),
                      timed_out=r.timed_out, plc_fault=r.fault,
-                     overruns=r.overruns, max_lateness_ms=r.max_lateness_ns / 1e6),
+                     overruns=r.overruns, max_lateness_ms=r.max_lateness_ns / 1e6, skipped_ticks=r.skipped_ticks),
             bus=dict(frames=st.frames if st else 0, frames_in_trace=sum(1 for e in r.trace if e.status != "error"),
                      errors=st.errors if st else 0,
                      load=st.load if st else 0.0, busy_ms=(st.busy_ns / 1e6) if st else 0.0,
@@ -307,7 +307,8 @@ class Report:
             f"run: {run['time_ms']:.1f} ms of PLC time from the first start ({run['start_ms']:.1f} ms) to the last "
             f"end ({run['end_ms']:.1f} ms), {_n(run['exchanges'], 'exchange')}, {_n(run['scans'], 'scan')} in "
             f"{run['wall_s']:.2f} s wall"
-            + (f", {run['overruns']} late scans (max {run['max_lateness_ms']:.1f} ms)" if o["bus"] != "sim" else "")
+            + (f", {run['overruns']} late scans (max {run['max_lateness_ms']:.1f} ms, {run['skipped_ticks']} ticks "
+               "skipped)" if o["bus"] != "sim" else "")
             + (" - TIMED OUT" if run["timed_out"] else "")
             + (f" - PLC FAULT: {run['plc_fault']}" if run["plc_fault"] else ""),
             f"bus: {_n(bus['frames'], 'frame')} in that time (the trace holds {bus['frames_in_trace']}, from "

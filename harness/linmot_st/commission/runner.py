@@ -153,6 +153,7 @@ class RunResult:
     fault: str = ""                            # a PLC fault (division by zero, index out of range) ended the run
     overruns: int = 0
     max_lateness_ns: int = 0
+    skipped_ticks: int = 0                     # real time: task activations late scans missed (cosim.py)
     stats: Any = None                          # BusStats over the commissioning span
     before: dict = field(default_factory=dict)  # node ID -> verify.drive_state() when switched on
 
@@ -426,6 +427,6 @@ def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s) -
     trace = sorted(plc_bus.records, key=lambda r: r.end_ns)
     res = RunResult(opts, nodes, plc.tick_ns, bit_ns, sampler.axes, trace, drives, scans=sim.scans,
                     wall_s=wall, timed_out=timed_out, fault=fault, overruns=sim.overruns,
-                    max_lateness_ns=sim.max_lateness_ns, before=before)
+                    max_lateness_ns=sim.max_lateness_ns, skipped_ticks=sim.skipped_ticks, before=before)
     res.stats = bus_stats(trace, bit_ns, res.t_start_ns, max(res.t_end_ns, res.t_start_ns))
     return res
