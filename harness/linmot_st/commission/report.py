@@ -169,6 +169,7 @@ class Report:
                                      differ=rb.differ, verdict=rb.verdict) for rb in self.read_backs[cid]])
                     for cid, c in ((c.curve_id, c) for c in self.pvl.curves)],
             verification=dict(ok=self.verification.ok, skipped=self.verification.skipped,
+                              by_plc=self.verification.by_plc,
                               checks=[dict(node=c.node, what=c.what, checked=c.checked, equal=c.equal,
                                            required=c.required, ok=c.ok, differences=c.differences, note=c.note)
                                       for c in self.verification.checks]),
@@ -330,8 +331,11 @@ class Report:
                 parts = [f"node {n['node']} {n['verdict']}"
                          + (f" ({n['source']})" if n["source"] and n["source"] != "bus" else "") for n in c["nodes"]]
                 lines.append(f"  curve {c['curve']} '{cv.name}', {_n(c['setpoints'], 'setpoint')}: " + "; ".join(parts))
-        lines += ["", "verification (the emulated drives' memory against the PVL file):"]
         v = self.verification
+        lines += ["", "verification (the emulated drives' memory against the PVL file):" if not v.by_plc
+                  else "verification:"]
+        if v.by_plc:
+            lines.append(f"  {v.by_plc}")
         if v.skipped:
             lines.append(f"  not done: {v.skipped}")
         for node in f["options"]["node_ids"]:
