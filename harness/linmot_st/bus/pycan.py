@@ -5,6 +5,10 @@
 the wall clock (monotonic), in ns since the server started, so a node written for virtual time runs
 unchanged. Every call into the node happens on the server thread while holding `server.lock`; other
 threads that inspect or change the node take the same lock (or use `server.call`).
+
+A node that has a `receive_ids()` method (the COB-IDs it reacts to) gets them as the bus's receive filters,
+kept up to date as they change: on SocketCAN the kernel then wakes the server only for those frames, so a
+node's answers are not queued behind the rest of a busy bus.
 """
 
 from __future__ import annotations
@@ -49,6 +53,8 @@ class NodeServer:
         self.frames_received = 0
         self.frames_sent = 0
         self.send_errors = 0
+        self._receive_ids = getattr(node, "receive_ids", None)
+        self._filtered: tuple[int, ...] | None = None
 
     # -- life cycle -------------------------------------------------------------------------
     def start(self) -> "NodeServer":
@@ -107,6 +113,13 @@ class NodeServer:
         if self.error is None:
             self.error = exc
 
+    def _filter(self) -> None:
+        """Give the bus the node's receive_ids() when they changed (called under the lock)."""
+        ids = tuple(self._receive_ids())
+        if ids != self._filtered:
+            self._filtered = ids
+            self.bus.set_filters([{"can_id": i, "can_mask": 0x7FF, "extended": False} for i in ids])
+
     def _run(self) -> None:
         node, bus, out = self.node, self.bus, self._out
         if self._on_start is not None:
@@ -119,6 +132,8 @@ class NodeServer:
             now = self.now_ns()
             try:
                 with self.lock:
+                    if self._receive_ids is not None:
+                        self._filter()
                     due = node.next_timer_ns()
                     if due is not None and due <= now:
                         self._queue(node.on_timer(now))
