@@ -19,12 +19,25 @@ def register(subparsers) -> None:
     p.add_argument("--profile", help="drive profile JSON (default: the seeds' example drive)")
     p.add_argument("--fast", action="store_true", help="short boot/MC/flash durations (for demos and tests)")
     p.add_argument("--duration", type=float, help="stop after this many seconds (default: until interrupted)")
+    p.add_argument("--dump-memory", metavar="FILE",
+                   help="when stopped, write the drive's memory (parameters ROM and RAM, curves and command table "
+                        "in RAM and flash) to FILE as JSON (emulator/memory.py), to check what a PLC wrote")
     p.set_defaults(func=run)
 
 
 def _error(message: str, rc: int) -> int:
     print(f"error: {message}", file=sys.stderr, flush=True)
     return rc
+
+
+def _check_writable(path: str) -> None:
+    """ValueError unless a file can be created at `path` (checked before serving, not after)."""
+    import os
+    from pathlib import Path
+    p = Path(path)
+    parent = p.parent if str(p.parent) else Path(".")
+    if p.is_dir() or not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK):
+        raise ValueError(f"--dump-memory {path}: cannot write a file there")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -49,6 +62,8 @@ def run(args: argparse.Namespace) -> int:
         if args.duration is not None and args.duration < 0:
             raise ValueError(f"--duration {args.duration}: must be >= 0")
         parse_bus_spec(spec, where=f"--interface {args.interface} --channel {args.channel}")
+        if args.dump_memory:
+            _check_writable(args.dump_memory)
         profile = load_profile(args.profile) if args.profile else None
     except ProfileError as exc:
         return _error(f"--profile {exc}", 2)
@@ -82,6 +97,12 @@ def run(args: argparse.Namespace) -> int:
         except RuntimeError as exc:                 # the drive raised while serving
             rc = _error(str(exc), 1)
         bus.shutdown()
+        if args.dump_memory:
+            from .memory import write
+            try:
+                write(drive, args.dump_memory)
+            except OSError as exc:
+                rc = _error(f"--dump-memory {args.dump_memory}: {exc.strerror or exc}", 1)
         if old_handler is not None:
             signal.signal(signal.SIGTERM, old_handler)
     print(f"E1100 node {args.node_id} stopped in NMT state {drive.nmt_state}", flush=True)
