@@ -6,7 +6,7 @@ machine with vcan), each program in its own process, as a user would run them.
             res = linmot_st("commission", "examples/two_axes.pvl", "--axes", "2", "--bus", "socketcan:vcan0",
                             "--no-emulate")
     drives.drive(1)            # an E1100Drive holding node 1's memory as its process left it
-    dump.messages()            # the recording, read back with python-can's LogReader
+    dump.messages()            # the recording (sentinels aside), read back with python-can's LogReader
 
 A new job over vcan (the motion job, say) is one more test of this shape: its command in `linmot_st(...)`,
 then assertions on `res` and on `drives.memory(n)` / `drives.drive(n)`.
@@ -133,34 +133,64 @@ class EmulatedDrives:
                                    f"{[self.returncodes.get(n) for n in bad]}\n" + self.logs())
 
 
-class Candump:
-    """`candump -L CHANNEL[,filters]` writing to `path` while the block runs (stopped with SIGINT, which
-    makes it flush); `messages()` reads the file back with python-can's LogReader."""
+SENTINEL_ID = 0x1FFFFFFF       # an extended identifier: ignored by the PLC and the drives, left out of messages()
 
-    def __init__(self, path: Path, channel: str = "vcan0", *, filters: tuple = (), settle_s: float = 0.3) -> None:
+
+class Candump:
+    """`candump -L CHANNEL[,filters]` writing to `path` while the block runs; `messages()` reads the file back
+    with python-can's LogReader. Entering returns once candump records (a sentinel frame it was sent is in
+    the file: its output is line-buffered with coreutils' stdbuf), leaving once it has recorded everything
+    sent before (a second sentinel), then stops it with SIGINT."""
+
+    def __init__(self, path: Path, channel: str = "vcan0", *, filters: tuple = (), timeout_s: float = 30) -> None:
         self.path = Path(path)
-        self.spec = ",".join([channel, *filters])
-        self.settle_s = settle_s
+        self.channel = channel
+        self.spec = ",".join([channel, *filters, *((f"{SENTINEL_ID:08X}:{SENTINEL_ID:08X}",) if filters else ())])
+        self.timeout_s = timeout_s
         self.proc: subprocess.Popen | None = None
         self.returncode: int | None = None
 
+    def _sentinel(self, bus, tag: bytes, repeat: bool) -> None:
+        import can
+        line = f"{SENTINEL_ID:08X}#{tag.hex().upper()}"
+        deadline = time.monotonic() + self.timeout_s
+        sent = False
+        while time.monotonic() < deadline:
+            if repeat or not sent:
+                bus.send(can.Message(arbitration_id=SENTINEL_ID, is_extended_id=True, data=tag))
+                sent = True
+            time.sleep(0.05)
+            if line in self.path.read_text(errors="replace"):
+                return
+            if self.proc.poll() is not None:
+                break
+        raise RuntimeError(f"candump {self.spec} did not record its sentinel {line} within {self.timeout_s} s "
+                           f"(exit status {self.proc.poll()}): {self.proc.stderr.read().decode() if self.proc.poll() is not None else ''}")
+
     def __enter__(self) -> "Candump":
+        import can
+        stdbuf = shutil.which("stdbuf")
+        if stdbuf is None:
+            raise FileNotFoundError("stdbuf (coreutils) is not on PATH: candump's output would not be line-buffered")
         self._file = open(self.path, "w")
-        self.proc = subprocess.Popen([can_utility("candump"), "-L", self.spec], stdout=self._file,
-                                     stderr=subprocess.PIPE)
-        time.sleep(self.settle_s)          # its socket is bound before the traffic it must see starts
-        if self.proc.poll() is not None:
-            raise RuntimeError(f"candump {self.spec} stopped at once: {self.proc.stderr.read().decode()}")
+        self.proc = subprocess.Popen([stdbuf, "-oL", can_utility("candump"), "-L", self.spec],
+                                     stdout=self._file, stderr=subprocess.PIPE)
+        with can.Bus(interface="socketcan", channel=self.channel) as bus:
+            self._sentinel(bus, b"start", repeat=True)
         return self
 
     def __exit__(self, *exc) -> None:
-        time.sleep(self.settle_s)          # the last frames reach its socket
-        self.returncode = _stop(self.proc, signal.SIGINT)
-        self._file.close()
+        import can
+        try:
+            with can.Bus(interface="socketcan", channel=self.channel) as bus:
+                self._sentinel(bus, b"end", repeat=False)
+        finally:
+            self.returncode = _stop(self.proc, signal.SIGINT)
+            self._file.close()
 
     def messages(self) -> list:
         import can
-        return list(can.LogReader(str(self.path)))
+        return [m for m in can.LogReader(str(self.path)) if not (m.is_extended_id and m.arbitration_id == SENTINEL_ID)]
 
 
 def sdo_frames(frames, node: int) -> list[tuple[int, bytes]]:
