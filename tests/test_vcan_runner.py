@@ -31,7 +31,7 @@ def test_a_command_runs_in_the_guest_with_vcan_and_the_hosts_files(tools, tmp_pa
               f"python -c 'import can, sys; print(sys.prefix)' && pwd && echo \"$MARK\" > {out} && "
               "touch /usr/not-on-the-host && echo bye >&2 && exit 7")
     run = Machine(tools).run(["sh", "-c", script], cwd=tmp_path, env={"MARK": "from the host"}, timeout_s=120,
-                             writable=(tmp_path,))
+                             writable=(tmp_path,), work_dir=tmp_path / "guest")
     assert run.returncode == 7 and not run.timed_out, run.describe()
     kind0, kind1, flags1 = run.output.split()[:3]
     assert kind0 == kind1 == "280" and int(flags1, 16) & 1          # ARPHRD_CAN, IFF_UP
@@ -42,14 +42,15 @@ def test_a_command_runs_in_the_guest_with_vcan_and_the_hosts_files(tools, tmp_pa
     assert (run.work_dir / "kernel.log").read_text() == run.kernel_log
 
 
-def test_a_guest_that_cannot_set_up_says_why_with_its_kernel_log(tools):
+def test_a_guest_that_cannot_set_up_says_why_with_its_kernel_log(tools, tmp_path):
     with pytest.raises(GuestStartError, match="cannot bring up this-name-is-too-long-for-linux") as exc:
-        Machine(tools, interfaces=("vcan0", "this-name-is-too-long-for-linux")).run(["true"], timeout_s=120)
+        Machine(tools, interfaces=("vcan0", "this-name-is-too-long-for-linux")).run(["true"], timeout_s=120,
+                                                                                    work_dir=tmp_path)
     assert "Virtual CAN interface driver" in exc.value.kernel_log
 
 
-def test_the_command_is_stopped_at_its_timeout(tools):
-    run = Machine(tools).run(["sleep", "60"], timeout_s=5)
+def test_the_command_is_stopped_at_its_timeout(tools, tmp_path):
+    run = Machine(tools).run(["sleep", "60"], timeout_s=5, work_dir=tmp_path)
     assert run.timed_out and run.returncode is None and run.seconds < 20
 
 

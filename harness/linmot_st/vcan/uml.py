@@ -121,9 +121,10 @@ class Machine:
 
     def run(self, argv: list[str], *, cwd: Path | str | None = None, env: dict | None = None,
             timeout_s: float = 300, work_dir: Path | None = None, writable: tuple = ()) -> GuestRun:
-        """Run argv in a fresh guest; returns a GuestRun. The work folder (default a new temporary one) is
-        read-write in the guest at its host path, as is every folder in `writable` (created if absent).
-        Raises GuestStartError when the guest never reached the command."""
+        """Run argv in a fresh guest; returns a GuestRun. The work folder (default a new one in the temporary
+        folder, left there with the kernel log, the output and the init script) is read-write in the guest at
+        its host path, as is every folder in `writable` (created if absent). Raises GuestStartError when the
+        guest never reached the command."""
         work = Path(work_dir or tempfile.mkdtemp(prefix="linmot-st-vcan-")).resolve()
         work.mkdir(parents=True, exist_ok=True)
         for name in ("rc", "output", "started", "kernel.log"):
