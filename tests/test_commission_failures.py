@@ -177,6 +177,19 @@ def test_a_read_back_that_differs_is_reported_with_both_values():
     assert [p.phase for p in ax.phases][-1] == "verify"
 
 
+def test_real_drives_are_verified_by_the_plcs_read_back_and_fail_without_it():
+    """--no-emulate: the drives' memory cannot be inspected; the PLC's VERIFY phase is the verification (an
+    axis is done only after it read every item back), and without it nothing is verified."""
+    from types import SimpleNamespace
+
+    from linmot_st.commission.verify import verify
+
+    v = verify(PVL, {}, SimpleNamespace(verify=True))
+    assert v.ok and "VERIFY phase" in v.by_plc and not v.skipped and not v.checks
+    v = verify(PVL, {}, SimpleNamespace(verify=False))
+    assert not v.ok and not v.by_plc and "nothing read back" in v.skipped
+
+
 def test_a_drive_that_changed_although_the_check_failed_is_compared_in_full():
     """The condensed "nothing written" is checked, not assumed: a change shows up, with the full comparison."""
     from types import SimpleNamespace

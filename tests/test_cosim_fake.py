@@ -284,6 +284,24 @@ def test_real_time_cosim_step_paces_scans():
         assert sim.scans == 11 and plc.time_ns == 55_000_000
 
 
+def test_real_time_cosim_overrun_moves_the_plc_clock_to_the_wall_clock():
+    # the third scan takes 3.5 ticks (the clock jumps while it runs): the next scan starts 2.5 ticks late,
+    # at the wall time, so the PLC's clock (its timers, its SDO timeouts) never falls behind real time
+    extra = [0]
+
+    def program(plc):
+        if plc.scan_count == 2:
+            extra[0] += 35_000_000
+
+    plc = FakePlc(program, tick_ns=10 * TICK)   # 10 ms ticks: host jitter stays far below one tick
+    with open_bus(f"virtual:linmot-st-test-{uuid.uuid4().hex}") as bus:
+        sim = RealTimeCoSim(plc, bus, mailbox=MB, clock=lambda: time.monotonic_ns() + extra[0])
+        sim.step(6)
+    assert sim.scans == 6 and sim.overruns == 1 and sim.skipped_ticks == 2
+    assert 25_000_000 <= sim.max_lateness_ns < 40_000_000
+    assert plc.time_ns == (6 + 2) * 10 * TICK            # every scan a tick, and the two missed ones
+
+
 @pytest.mark.parametrize("count", [33, 100, -1])
 def test_tx_count_outside_the_mailbox_is_an_error(count):
     # no driver could send Tx[33..]: an error that names the mailbox and the count, not a silent truncation
@@ -296,3 +314,23 @@ def test_tx_count_outside_the_mailbox_is_an_error(count):
     with pytest.raises(CoSimError, match=rf"{re.escape(MB)}\.TxCount = {count}: outside 0\.\.32"):
         sim.step(1)
     assert bus.trace == [] and plc[f"{MB}.TXCOUNT"] == 0
+
+
+
+def test_a_stalled_real_time_plc_gets_every_frame_later_not_lost():
+    """RealTimeCoSim: more frames than Rx holds arrived before one scan (a stalled PLC): the surplus waits
+    in the driver's receive queue for the next scans, in order, and nothing is lost."""
+    from linmot_st.cosim import MAILBOX_FRAMES
+
+    batches = []
+    plc = FakePlc(lambda p: batches.append(p.rx()))
+    channel = f"stall-{uuid.uuid4().hex}"
+    with open_bus(f"virtual:{channel}") as tx, open_bus(f"virtual:{channel}") as rx:
+        for k in range(80):
+            tx.send(Frame(0x181, k.to_bytes(2, "little")).to_message())
+        time.sleep(0.05)
+        sim = RealTimeCoSim(plc, rx, mailbox=MB)
+        sim.step(4)
+    assert [len(b) for b in batches[:3]] == [MAILBOX_FRAMES, MAILBOX_FRAMES, 80 - 2 * MAILBOX_FRAMES]
+    seen = [int.from_bytes(f.data, "little") for b in batches for f in b]
+    assert seen == list(range(80)) and plc[f"{MB}.RXLOST"] == 0 and sim.rx_dropped == 0

@@ -25,6 +25,7 @@ import time
 from typing import Any, Callable
 
 from linmot_st.bus.frame import Frame
+from linmot_st.bus.pycan import OwnFrames
 
 MAILBOX_FRAMES = 32   # T_CanFrames : ARRAY[1..32] OF T_CanFrame
 
@@ -123,6 +124,10 @@ class Mailbox:
                 slot[4].value = bool(echoes and echoes[i])
         self._rx_count.value = n
         return lost
+
+    def count_rx_lost(self, n: int) -> None:
+        """RxLost += n: frames the driver could not hold."""
+        self._rx_lost.value = (self._rx_lost.value + n) & 0xFFFFFFFF
 
     def _bind_rx(self, i: int) -> tuple:
         slot = self._rx[i] = self._bind("Rx", i)
@@ -239,19 +244,25 @@ class RealTimeCoSim:
     """A PLC stepped against the wall clock on a python-can bus (its own thread: the caller's).
 
     Scan k of a `step`/`run_until` call starts when the wall clock has advanced as far as the PLC's
-    clock since the call began; the frames received meanwhile go into Rx. A scan that starts late
-    counts as an overrun (`overruns`, `max_lateness_ns`); later scans are not skipped.
+    clock since the call began; the frames received meanwhile go into Rx. A scan that starts a tick or
+    more late is an overrun (`overruns`, `max_lateness_ns`): it still runs, but at the wall time (the
+    PLC's clock moves on by the whole ticks missed, `skipped_ticks`), so that the PLC's timers and
+    timeouts keep real time on a machine too slow for the task, as on a PLC whose task overran. Frames
+    beyond the 32 that Rx holds wait for the next scans, as in a CAN driver's receive queue (`rx_queue`
+    frames; beyond that they are lost and counted in RxLost): a stalled PLC sees every frame, late.
     """
 
     def __init__(self, plc: Any, can_bus: Any, mailbox: str = "CONFIG0.RES0.CAN0", *,
-                 clock: Callable[[], int] = time.monotonic_ns, echo: bool = False) -> None:
+                 clock: Callable[[], int] = time.monotonic_ns, echo: bool = False, rx_queue: int = 1024) -> None:
         self.plc = plc
+        self.rx_queue = rx_queue      # frames the driver holds beyond the 32 of one scan (a CAN driver's FIFO)
         self.can_bus = can_bus
         self.mailbox = Mailbox(plc, mailbox)
         self.clock = clock
         # echo: the bus was opened with receive_own_messages=True, so it returns the PLC's own frames once
-        # sent (python-can marks them is_rx False): they go into Rx as echoes, in the order received
+        # sent: they go into Rx as echoes, in the order received (OwnFrames tells them from other nodes')
         self.echo = echo
+        self._own = OwnFrames()
         self.mailbox.set_tx_echo(echo)
         self._pending_echo: list[bool] = []
         self.scans = 0
@@ -259,29 +270,38 @@ class RealTimeCoSim:
         self.frames_received = 0
         self.rx_dropped = 0
         self.send_errors = 0
-        self.overruns = 0
+        self.overruns = 0             # scans that started one tick or more after their due time
         self.max_lateness_ns = 0
+        self.skipped_ticks = 0        # task activations missed by those scans (the PLC clock moved on)
         self._pending: list[Frame] = []
 
-    def _collect(self, until_wall_ns: int) -> None:
+    def _collect(self, until_wall_ns: int) -> int:
+        """Receive into the pending frames until the wall clock reaches `until_wall_ns`; returns the wall
+        time then. A scan already due only drains what has arrived (no clock read per frame: on a machine
+        where a system call is dear, such as User-Mode Linux, the clock is read once)."""
         bus, pending, clock = self.can_bus, self._pending, self.clock
+        now = clock()
         while True:
-            remaining = until_wall_ns - clock()
+            remaining = until_wall_ns - now
             msg = bus.recv(timeout=remaining / 1e9 if remaining > 0 else 0)
             if msg is None:
-                if clock() >= until_wall_ns:
-                    return
+                if remaining <= 0:
+                    return now
+                now = clock()
+                if now >= until_wall_ns:
+                    return now
                 continue
-            if msg.is_error_frame or msg.is_extended_id or getattr(msg, "is_fd", False):
-                continue
-            own = not getattr(msg, "is_rx", True)
-            if own and not (self.echo and is_echoed(msg.arbitration_id)):
-                continue
-            pending.append(Frame.from_message(msg))
-            self._pending_echo.append(own)
+            if not (msg.is_error_frame or msg.is_extended_id or getattr(msg, "is_fd", False)):
+                own = self.echo and self._own.is_own(msg)
+                if not own or is_echoed(msg.arbitration_id):
+                    pending.append(Frame.from_message(msg))
+                    self._pending_echo.append(own)
+            if remaining > 0:
+                now = clock()
 
     def _scans(self, n: int | None, predicate: Callable[[], bool] | None, timeout_s: float | None) -> int:
-        plc, mb = self.plc, self.mailbox
+        plc, mb, send = self.plc, self.mailbox, self.can_bus.send
+        tick = plc.tick_ns
         wall0, plc0 = self.clock(), plc.time_ns
         wall_end = None if timeout_s is None else wall0 + int(timeout_s * 1e9)
         k = 0
@@ -291,13 +311,26 @@ class RealTimeCoSim:
             due = wall0 + (plc.time_ns - plc0)
             if wall_end is not None and due > wall_end:
                 break
-            self._collect(due)
-            late = self.clock() - due
-            if late > plc.tick_ns:
+            late = self._collect(due) - due
+            if late > self.max_lateness_ns:
+                self.max_lateness_ns = late
+            if late >= tick:
+                # an overrun: the PLC's clock keeps real time (its timers and timeouts measure the wall
+                # clock, as on a PLC whose task overran), so this scan runs at the wall time in whole ticks
                 self.overruns += 1
-            self.max_lateness_ns = max(self.max_lateness_ns, late)
-            frames, self._pending = self._pending, []
-            echoes, self._pending_echo = self._pending_echo, []
+                missed = late // tick
+                self.skipped_ticks += missed
+                plc.time_ns = plc.time_ns + missed * tick
+            # the driver's receive queue: Rx takes the oldest 32, the rest waits for the next scans (a PLC
+            # that stalled gets every frame late rather than none); beyond rx_queue frames are lost
+            pending, echo_flags = self._pending, self._pending_echo
+            if len(pending) > MAILBOX_FRAMES + self.rx_queue:
+                surplus = len(pending) - MAILBOX_FRAMES - self.rx_queue
+                del pending[-surplus:], echo_flags[-surplus:]
+                self.rx_dropped += surplus
+                mb.count_rx_lost(surplus)
+            frames, self._pending = pending[:MAILBOX_FRAMES], pending[MAILBOX_FRAMES:]
+            echoes, self._pending_echo = echo_flags[:MAILBOX_FRAMES], echo_flags[MAILBOX_FRAMES:]
             self.frames_received += len(frames) - sum(echoes)
             self.rx_dropped += mb.write_rx(frames, echoes)
             plc.step(1)
@@ -305,8 +338,11 @@ class RealTimeCoSim:
             k += 1
             for f in mb.take_tx():
                 try:
-                    self.can_bus.send(f.to_message(timestamp=time.time()))
+                    msg = f.to_message()
+                    send(msg)
                     self.frames_sent += 1
+                    if self.echo:
+                        self._own.sent(msg)
                 except Exception:  # noqa: BLE001 - a full Tx queue loses the frame, like a PLC driver would
                     self.send_errors += 1
         if predicate is not None:

@@ -5,11 +5,16 @@
 the wall clock (monotonic), in ns since the server started, so a node written for virtual time runs
 unchanged. Every call into the node happens on the server thread while holding `server.lock`; other
 threads that inspect or change the node take the same lock (or use `server.call`).
+
+A node that has a `receive_ids()` method (the COB-IDs it reacts to) gets them as the bus's receive filters,
+kept up to date as they change: on SocketCAN the kernel then wakes the server only for those frames, so a
+node's answers are not queued behind the rest of a busy bus.
 """
 
 from __future__ import annotations
 
 import heapq
+from collections import deque
 import logging
 import threading
 import time
@@ -49,6 +54,8 @@ class NodeServer:
         self.frames_received = 0
         self.frames_sent = 0
         self.send_errors = 0
+        self._receive_ids = getattr(node, "receive_ids", None)
+        self._filtered: tuple[int, ...] | None = None
 
     # -- life cycle -------------------------------------------------------------------------
     def start(self) -> "NodeServer":
@@ -107,6 +114,13 @@ class NodeServer:
         if self.error is None:
             self.error = exc
 
+    def _filter(self) -> None:
+        """Give the bus the node's receive_ids() when they changed (called under the lock)."""
+        ids = tuple(self._receive_ids())
+        if ids != self._filtered:
+            self._filtered = ids
+            self.bus.set_filters([{"can_id": i, "can_mask": 0x7FF, "extended": False} for i in ids])
+
     def _run(self) -> None:
         node, bus, out = self.node, self.bus, self._out
         if self._on_start is not None:
@@ -119,6 +133,8 @@ class NodeServer:
             now = self.now_ns()
             try:
                 with self.lock:
+                    if self._receive_ids is not None:
+                        self._filter()
                     due = node.next_timer_ns()
                     if due is not None and due <= now:
                         self._queue(node.on_timer(now))
@@ -145,6 +161,40 @@ class NodeServer:
                     self._queue(node.on_frame(frame, self.now_ns()))
             except Exception as exc:  # noqa: BLE001
                 self._fail(exc)
+
+
+class OwnFrames:
+    """Tells a socket's own frames, returned by a bus opened with receive_own_messages=True, from the others.
+
+    python-can's `is_rx` is not enough: on SocketCAN it is False for every frame sent from this host
+    (MSG_DONTROUTE), whichever socket sent it, so a drive served by another process on the same vcan0 looks
+    like an echo. A socket's own frames come back in the order it sent them: a message with is_rx False that
+    equals the oldest frame sent and not yet seen back is one of ours; any other is another node's.
+    """
+
+    LIMIT = 4096            # sent frames remembered (a bus that never returns them must not grow without end)
+
+    def __init__(self) -> None:
+        self._sent: deque = deque()
+
+    @staticmethod
+    def _key(msg: Any) -> tuple:
+        return msg.arbitration_id, bool(msg.is_remote_frame), bytes(msg.data or b"")
+
+    def sent(self, msg: Any) -> None:
+        self._sent.append(self._key(msg))
+        if len(self._sent) > self.LIMIT:
+            self._sent.popleft()
+
+    def is_own(self, msg: Any) -> bool:
+        if getattr(msg, "is_rx", True):
+            return False
+        key, sent = self._key(msg), self._sent
+        if key not in sent:
+            return False
+        while sent.popleft() != key:        # frames sent before it that never came back (a lost echo)
+            pass
+        return True
 
 
 DEFAULT_VIRTUAL_CHANNEL = "linmot-st"

@@ -153,7 +153,7 @@ class Report:
             run=dict(start_ms=r.t_start_ns / 1e6, end_ms=r.t_end_ns / 1e6, time_ms=span / 1e6,
                      exchanges=total_ex, necessary_exchanges=need, scans=r.scans, wall_s=round(r.wall_s, 3),
                      timed_out=r.timed_out, interrupted=r.interrupted, plc_fault=r.fault,
-                     overruns=r.overruns, max_lateness_ms=r.max_lateness_ns / 1e6),
+                     overruns=r.overruns, max_lateness_ms=r.max_lateness_ns / 1e6, skipped_ticks=r.skipped_ticks),
             bus=dict(frames=st.frames if st else 0, frames_in_trace=sum(1 for e in r.trace if e.status != "error"),
                      errors=st.errors if st else 0,
                      load=st.load if st else 0.0, busy_ms=(st.busy_ns / 1e6) if st else 0.0,
@@ -173,6 +173,7 @@ class Report:
                                      differ=rb.differ, verdict=rb.verdict) for rb in self.read_backs[cid]])
                     for cid, c in ((c.curve_id, c) for c in self.pvl.curves)],
             verification=dict(ok=self.verification.ok, skipped=self.verification.skipped,
+                              by_plc=self.verification.by_plc,
                               checks=[dict(node=c.node, what=c.what, checked=c.checked, equal=c.equal,
                                            required=c.required, ok=c.ok, differences=c.differences, note=c.note)
                                       for c in self.verification.checks]),
@@ -324,7 +325,8 @@ class Report:
             f"run: {run['time_ms']:.1f} ms of PLC time from the first start ({run['start_ms']:.1f} ms) to the last "
             f"end ({run['end_ms']:.1f} ms), {_n(run['exchanges'], 'exchange')}, {_n(run['scans'], 'scan')} in "
             f"{run['wall_s']:.2f} s wall"
-            + (f", {run['overruns']} late scans (max {run['max_lateness_ms']:.1f} ms)" if o["bus"] != "sim" else "")
+            + (f", {run['overruns']} late scans (max {run['max_lateness_ms']:.1f} ms, {run['skipped_ticks']} ticks "
+               "skipped)" if o["bus"] != "sim" else "")
             + (" - TIMED OUT" if run["timed_out"] else "")
             + (" - INTERRUPTED (Ctrl-C)" if run.get("interrupted") else "")
             + (f" - PLC FAULT: {run['plc_fault']}" if run["plc_fault"] else ""),
@@ -347,8 +349,11 @@ class Report:
                 parts = [f"node {n['node']} {n['verdict']}"
                          + (f" ({n['source']})" if n["source"] and n["source"] != "bus" else "") for n in c["nodes"]]
                 lines.append(f"  curve {c['curve']} '{cv.name}', {_n(c['setpoints'], 'setpoint')}: " + "; ".join(parts))
-        lines += ["", "verification (the emulated drives' memory against the PVL file):"]
         v = self.verification
+        lines += ["", "verification (the emulated drives' memory against the PVL file):" if not v.by_plc
+                  else "verification:"]
+        if v.by_plc:
+            lines.append(f"  {v.by_plc}")
         if v.skipped:
             lines.append(f"  not done: {v.skipped}")
         for node in f["options"]["node_ids"]:

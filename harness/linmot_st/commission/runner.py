@@ -159,6 +159,7 @@ class RunResult:
     fault: str = ""                            # a PLC fault (division by zero, index out of range) ended the run
     overruns: int = 0
     max_lateness_ns: int = 0
+    skipped_ticks: int = 0                     # real time: task activations late scans missed (cosim.py)
     stats: Any = None                          # BusStats over the commissioning span
     before: dict = field(default_factory=dict)  # node ID -> verify.drive_state() when switched on
     after: Any = None                          # what run(after=...) returned (the motion job's result)
@@ -370,9 +371,12 @@ def _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, time
 class _RecordingBus:
     """A python-can Bus wrapper that keeps every frame the PLC sends or receives (the run's trace)."""
 
-    def __init__(self, bus, t0: int, bit_ns: int) -> None:
+    def __init__(self, bus, t0: int, bit_ns: int, echo: bool = False) -> None:
+        from linmot_st.bus.pycan import OwnFrames
+
         self.bus, self.t0, self.bit_ns = bus, t0, bit_ns
         self.records: list[TraceRecord] = []
+        self._own = OwnFrames() if echo else None      # echo: the bus returns the PLC's own frames
 
     def _record(self, msg, sender: str) -> None:
         from linmot_st.bus import Frame, frame_length_bits
@@ -383,10 +387,12 @@ class _RecordingBus:
     def send(self, msg, timeout=None):
         self.bus.send(msg, timeout=timeout)
         self._record(msg, "plc")
+        if self._own is not None:
+            self._own.sent(msg)
 
     def recv(self, timeout=None):
         msg = self.bus.recv(timeout=timeout)
-        if (msg is not None and getattr(msg, "is_rx", True)       # the PLC's own echoes: recorded by send
+        if (msg is not None and not (self._own is not None and self._own.is_own(msg))   # own: recorded by send
                 and not (msg.is_error_frame or msg.is_extended_id or getattr(msg, "is_fd", False))):
             self._record(msg, f"node{msg.arbitration_id & 0x7F}")
         return msg
@@ -428,7 +434,7 @@ def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s, a
             raw, echo = opened(receive_own_messages=True), True
         except TypeError:
             raw, echo = opened(), False
-        plc_bus = _RecordingBus(raw, time.monotonic_ns(), bit_ns)
+        plc_bus = _RecordingBus(raw, time.monotonic_ns(), bit_ns, echo)
         for b, d in zip(drive_buses, drives.values()):
             d.attach(b)                                  # switched on now: boots after its boot time
         sim = RealTimeCoSim(plc, plc_bus, mailbox=MAILBOX, echo=echo)
@@ -464,7 +470,7 @@ def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s, a
     trace = sorted(plc_bus.records, key=lambda r: r.end_ns)
     res = RunResult(opts, nodes, plc.tick_ns, bit_ns, sampler.axes, trace, drives, scans=sim.scans,
                     wall_s=wall, timed_out=timed_out, fault=fault, overruns=sim.overruns,
-                    max_lateness_ns=sim.max_lateness_ns, before=before, interrupted=interrupted,
-                    after=after_result)
+                    max_lateness_ns=sim.max_lateness_ns, skipped_ticks=sim.skipped_ticks, before=before,
+                    interrupted=interrupted, after=after_result)
     res.stats = bus_stats(trace, bit_ns, res.t_start_ns, max(res.t_end_ns, res.t_start_ns))
     return res

@@ -36,7 +36,8 @@ class Check:
 @dataclass
 class Verification:
     checks: list[Check] = field(default_factory=list)
-    skipped: str = ""            # why nothing was verified (real drives)
+    skipped: str = ""            # why nothing was verified (real drives and --no-verify)
+    by_plc: str = ""             # real drives: only the PLC's VERIFY phase checked them (its read-back)
 
     @property
     def ok(self) -> bool:
@@ -172,7 +173,12 @@ def verify(pvl, drives: dict, opts, *, before: dict | None = None, stopped_befor
     stopped_before_writes = stopped_before_writes or {}
     v = Verification()
     if not drives:
-        v.skipped = "real drives: verified only by the PLC's own VERIFY phase"
+        # real drives: an axis is done only after its VERIFY phase read every item back and found it equal
+        if opts.verify:
+            v.by_plc = ("real drives: checked by the PLC's VERIFY phase, which read every item back; "
+                        "their memory is not inspected here")
+        else:
+            v.skipped = "real drives and --no-verify: nothing read back"
         return v
     curves = {c.curve_id: (c.info_block, list(c.setpoints)) for c in pvl.curves}
     entries = {e.entry_id: e.data for e in pvl.command_table}

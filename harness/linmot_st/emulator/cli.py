@@ -22,13 +22,16 @@ def register(subparsers) -> None:
     p.add_argument("--fast", action="store_true", help="short boot/MC/flash durations (for demos and tests)")
     p.add_argument("--duration", type=non_negative_seconds,
                    help="stop after this many seconds (default: until interrupted)")
+    p.add_argument("--dump-memory", metavar="FILE",
+                   help="when stopped, write the drive's memory (parameters ROM and RAM, curves and command table "
+                        "in RAM and flash) to FILE as JSON (emulator/memory.py), to check what a PLC wrote")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     """Exit status 0 when stopped (duration, Ctrl-C, SIGTERM), 2 for bad arguments, 1 when the bus
     cannot be opened or the drive fails while serving. On stopping it says what it served."""
-    from ..cliargs import error
+    from ..cliargs import check_output_file, error
 
     def _error(message: str, rc: int) -> int:
         error(args, message)
@@ -47,6 +50,8 @@ def run(args: argparse.Namespace) -> int:
     spec = f"{args.interface}:{args.channel}"
     try:
         parse_bus_spec(spec, where=f"--interface {args.interface} --channel {args.channel}")
+        if args.dump_memory:
+            check_output_file(args.dump_memory, f"--dump-memory {args.dump_memory}")
         profile = load_profile(args.profile) if args.profile else None
     except ProfileError as exc:
         return _error(f"--profile {exc}", 2)
@@ -83,6 +88,12 @@ def run(args: argparse.Namespace) -> int:
         except RuntimeError as exc:                 # the drive raised while serving
             rc = _error(str(exc), 1)
         bus.shutdown()
+        if args.dump_memory:
+            from .memory import write
+            try:
+                write(drive, args.dump_memory)
+            except OSError as exc:
+                rc = _error(f"--dump-memory {args.dump_memory}: {exc.strerror or exc}", 1)
         if old_handler is not None:
             signal.signal(signal.SIGTERM, old_handler)
     done = (f" after {time.monotonic() - t0:.1f} s: {served.frames_received} frames received, "

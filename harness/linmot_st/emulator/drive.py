@@ -188,6 +188,17 @@ class E1100Drive:
                 t = other
         return t
 
+    def receive_ids(self) -> list[int]:
+        """The COB-IDs on_frame reacts to: NMT (000h), its SDO requests (600h+ID), SYNC (1005h) and its valid
+        RxPDOs (1400h..1402h). NodeServer makes them the bus's receive filters (a CAN controller's
+        acceptance filter), so a served drive is woken only for its own frames."""
+        ids = {0x000, 0x600 + self.node_id, self.comm.value(0x1005) & 0x7FF}
+        for n in range(3):
+            cob = self.comm.value(0x1400 + n, 1)
+            if not cob & 0x80000000:
+                ids.add(cob & 0x7FF)
+        return sorted(ids)
+
     # ------------------------------------------------------------------ inspection
     @property
     def booted(self) -> bool:

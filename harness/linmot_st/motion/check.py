@@ -50,13 +50,13 @@ def curve_start(drive, curve_id: int, t0_ns: int, t1_ns: int) -> int | None:
 
 
 def check_motion(result, plan: Plan, drives: dict) -> MotionCheck:
-    """In a real-time run each drive has its own clock (result.clock_offsets, within result.clock_margin_ns):
-    a state is then checked anywhere within the margin of the step's end."""
+    """In a real-time run each drive has its own clock: a step's end is mapped to it by the reading taken right
+    after the scan that saw it (StepRecord.off1_ns), and a state is checked anywhere within
+    result.clock_margin_ns of it."""
     out = MotionCheck()
     margin = result.clock_margin_ns
     for ax in result.axes:
         drive = drives.get(ax.node_id)
-        off = result.clock_offsets.get(ax.node_id, 0)
         if ax.error or not ax.done:
             out.steps.append(StepCheck(ax.axis, ax.fail_step, "job", False,
                                        f"the motion program stopped at step {ax.fail_step}"
@@ -67,6 +67,7 @@ def check_motion(result, plan: Plan, drives: dict) -> MotionCheck:
                 out.steps.append(StepCheck(ax.axis, rec.index, rec.kind, rec.ok, "done by the PLC"))
                 continue
             traj = drive.mc.trajectory
+            off = rec.off1_ns
             end = traj.at(rec.t1_ns + off)
             around = [end] + traj.between(rec.t1_ns + off - margin, rec.t1_ns + off + margin) if margin else [end]
             if not rec.ok:
@@ -80,7 +81,7 @@ def check_motion(result, plan: Plan, drives: dict) -> MotionCheck:
                                            f"at {reached:.3f} mm, target {step.target_mm:g} mm "
                                            f"(tolerance {POSITION_TOLERANCE_MM} mm)", reached_mm=reached))
             elif step.kind == "curve":
-                out.steps.append(_check_curve(ax, rec, step, drive, off))
+                out.steps.append(_check_curve(ax, rec, step, drive))
             elif step.kind == "home":
                 ok = any(s.status_word & 0x0800 for s in around)
                 out.steps.append(StepCheck(ax.axis, rec.index, "home", ok, "homed" if ok else "not homed"))
@@ -95,9 +96,10 @@ def check_motion(result, plan: Plan, drives: dict) -> MotionCheck:
     return out
 
 
-def _check_curve(ax, rec, step, drive, off: int) -> StepCheck:
+def _check_curve(ax, rec, step, drive) -> StepCheck:
     run = step.curve
-    t_exec = curve_start(drive, step.curve_id, rec.t0_ns + off - 5_000_000, rec.t1_ns + off + 5_000_000)
+    t_exec = curve_start(drive, step.curve_id, rec.t0_ns + rec.off0_ns - 5_000_000,
+                         rec.t1_ns + rec.off1_ns + 5_000_000)
     if t_exec is None:
         return StepCheck(ax.axis, rec.index, "curve", False, "the drive executed no 040xh command for this curve")
     samples = drive.mc.trajectory.between(t_exec, t_exec + run.duration_ns)
@@ -109,4 +111,4 @@ def _check_curve(ax, rec, step, drive, off: int) -> StepCheck:
     return StepCheck(ax.axis, rec.index, "curve", ok,
                      f"demand within {dem:.4f} mm of the curve as written (tolerance {CURVE_DEMAND_TOLERANCE_MM}), "
                      f"actual within {act:.3f} mm (tolerance {CURVE_ACTUAL_TOLERANCE_MM}), {len(samples)} samples",
-                     demand_dev_mm=dem, actual_dev_mm=act, t_exec_ns=t_exec - off)
+                     demand_dev_mm=dem, actual_dev_mm=act, t_exec_ns=t_exec - rec.off0_ns)

@@ -29,6 +29,10 @@ class StepRecord:
     ok: bool = False
     error_id: int = 0
     drive_error: int = 0
+    # real time: the drive's clock minus the PLC's when the start / the end was seen (read right after that
+    # scan, so the drive's state then is at least what the PLC saw); 0 in virtual time (one clock)
+    off0_ns: int = 0
+    off1_ns: int = 0
 
     @property
     def scans(self) -> int:
@@ -71,8 +75,9 @@ class MotionResult:
 class MotionSampler:
     """Reads each axis' StepNo and end flags after every scan; records step boundaries; tells progress."""
 
-    def __init__(self, plc, node_ids: list[int], plan: Plan, progress=None):
+    def __init__(self, plc, node_ids: list[int], plan: Plan, progress=None, drives: dict | None = None):
         self.plc, self.plan, self.progress = plc, plan, progress
+        self.drives = drives or {}
         self.axes = [AxisMotion(k + 1, n) for k, n in enumerate(node_ids)]
         v = plc.var
         self._vars = [dict(step=v(f"{INSTANCE}.A{k}.MOT.STEPNO"), done=v(f"{INSTANCE}.A{k}.MOT.DONE"),
@@ -90,21 +95,28 @@ class MotionSampler:
                 k = vs["step"].value
                 cur = ax.steps[-1] if ax.steps else None
                 if k >= 1 and (cur is None or cur.index != k) and k <= len(self.plan.steps):
+                    off = self._offset(ax.node_id, t - plc.tick_ns)
                     if cur is not None:
-                        cur.t1_ns, cur.scan1, cur.ok = t - plc.tick_ns, self.scans - 1, True
+                        cur.t1_ns, cur.scan1, cur.ok, cur.off1_ns = t - plc.tick_ns, self.scans - 1, True, off
                         if self.progress:
                             self.progress.step_done(ax, cur)
                     s = self.plan.steps[k - 1]
-                    ax.steps.append(StepRecord(k, s.kind, s.label, t - plc.tick_ns, self.scans - 1))
+                    ax.steps.append(StepRecord(k, s.kind, s.label, t - plc.tick_ns, self.scans - 1, off0_ns=off))
                 if vs["done"].value or vs["error"].value:
                     cur = ax.steps[-1] if ax.steps else None
                     ax.done, ax.error = bool(vs["done"].value), bool(vs["error"].value)
                     if cur is not None and not cur.t1_ns:
                         cur.t1_ns, cur.scan1, cur.ok = t, self.scans, ax.done
+                        cur.off1_ns = self._offset(ax.node_id, t)
                         if self.progress:
                             self.progress.step_done(ax, cur)
         self.scans += 1
         return all(a.done or a.error for a in self.axes)
+
+    def _offset(self, node: int, plc_t: int) -> int:
+        drive = self.drives.get(node)
+        now = drive.clock_now_ns() if drive is not None else None
+        return 0 if now is None else now - plc_t
 
 
 def _write_steps(plc, plan: Plan) -> None:
@@ -124,13 +136,13 @@ def motion_phase(plan: Plan, timeout_s: float, progress=None):
         nodes = list(drives) or list(range(1, plc[f"{INSTANCE}.AXES"] + 1))
         _write_steps(plc, plan)
         plc[f"{INSTANCE}.RUNMOTION"] = True
-        sampler = MotionSampler(plc, nodes, plan, progress)
+        sampler = MotionSampler(plc, nodes, plan, progress, drives)
         result = MotionResult(plan, sampler.axes, plc.time_ns)
         for n, d in drives.items():
             now = d.clock_now_ns()
             if now is not None:
-                # real time: the PLC's clock and each drive's clock count from different starts; the PLC is
-                # within a scan of the wall clock here, the frames a few hundred us in transit
+                # real time: the PLC's clock and each drive's clock count from different starts (the plot's
+                # time axis; the checks use each step's own readings, StepRecord.off0_ns / off1_ns)
                 result.clock_offsets[n] = now - plc.time_ns
                 result.clock_margin_ns = 5 * plc.tick_ns
         wall0 = time.perf_counter()
