@@ -19,7 +19,7 @@ from typing import Any, Callable
 
 from .project import INSTANCE, MAILBOX, MAX_AXES
 
-PHASES = ("idle", "wait", "start", "check", "preflight", "params", "curves", "ct", "flash", "reset", "verify", "done")
+PHASES = ("idle", "wait", "start", "check", "compare", "preflight", "params", "curves", "ct", "flash", "reset", "verify", "done")
 
 
 def phase_name(enum_value: str) -> str:
@@ -54,6 +54,7 @@ class RunOptions:
     reset: bool = True
     verify: bool = True
     preflight: bool = True                     # the FB asks each drive whether it can take the dataset first
+    force: bool = False                        # write everything (Force); default: only what differs
     curve_memory: int | None = None            # bytes of curve memory (CurveMemory); None: the emulated
                                                # drive's capacity, 0 with real drives (not checked)
     timings: str | None = None                 # "real" | "fast"; default real on sim, fast on real-time buses
@@ -114,6 +115,9 @@ class AxisResult:
     drive_layer: tuple[int, int, int] = (0, 0, 0)
     exchanges: int = 0
     live_written: int = 0
+    written: int = 0                           # items written, skipped (the drive held them), read back equal
+    skipped: int = 0
+    verified: int = 0
     mc_stopped: bool = False                   # the run left the drive's MC stopped (McStopped)
     fail_delay_ns: int = 0                     # from the failure to its report (the MC restart; FailDelay)
     up_ns: int | None = None                   # when the PLC first heard the drive
@@ -262,6 +266,8 @@ def _configure(plc, opts: RunOptions, nodes: list[int], curve_memory: int = 0) -
     plc[f"{p}.VERIFY"] = opts.verify
     plc[f"{p}.PREFLIGHT"] = opts.preflight
     plc[f"{p}.CURVEMEMORY"] = curve_memory
+    for k in range(1, len(nodes) + 1):
+        plc[f"{p}.A{k}.FORCE"] = opts.force        # an input of each axis (FB_PlcAxis), not of the program
     plc[f"{p}.START"] = True
 
 
@@ -276,6 +282,7 @@ def _collect(plc, sampler: Sampler) -> None:
         dl = c["DRIVELAYER"]
         ax.drive_layer = (dl["TREEID"], dl["MAINVERSION"], dl["SUBVERSION"])
         ax.exchanges, ax.live_written = c["EXCHANGES"], c["LIVEWRITTEN"]
+        ax.written, ax.skipped, ax.verified = c["WRITTEN"], c["SKIPPED"], c["VERIFIED"]
         ax.mc_stopped, ax.fail_delay_ns = bool(c["MCSTOPPED"]), c["FAILDELAY"]
 
 
