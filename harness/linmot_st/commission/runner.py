@@ -166,6 +166,7 @@ class RunResult:
     skipped_ticks: int = 0                     # real time: task activations late scans missed (cosim.py)
     stats: Any = None                          # BusStats over the commissioning span
     before: dict = field(default_factory=dict)  # node ID -> verify.drive_state() when switched on
+    wear_before: dict = field(default_factory=dict)  # node ID -> drive_wear() when switched on
     after: Any = None                          # what run(after=...) returned (the motion job's result)
 
     @property
@@ -177,6 +178,14 @@ class RunResult:
     def t_end_ns(self) -> int:
         ends = [a.phases[-1].t1_ns for a in self.axes if a.phases]
         return max(ends) if ends else self.t_start_ns
+
+    def wear(self, node: int) -> dict | None:
+        """What the run cost the emulated drive's non-volatile memory: flash saves per store, ROM writes."""
+        d = self.drives.get(node)
+        if d is None or node not in self.wear_before:
+            return None
+        now, then = drive_wear(d), self.wear_before[node]
+        return {k: now[k] - then[k] for k in now}
 
     @property
     def commissioned(self) -> bool:
@@ -253,6 +262,12 @@ class Sampler:
         """(phase, items done, items total) of axis k (0-based) now."""
         vs = self._vars[k]
         return phase_name(vs["phase"].value), vs["items"].value, vs["total"].value
+
+
+def drive_wear(drive) -> dict:
+    """The emulated drive's write counters (docs/emulator.md): flash saves of each store, ROM writes."""
+    return dict(flash_curves=drive.flash_cycles["curves"], flash_ct=drive.flash_cycles["ct"],
+                rom_writes=drive.params.rom_writes)
 
 
 def _configure(plc, opts: RunOptions, nodes: list[int], curve_memory: int = 0) -> None:
@@ -345,6 +360,7 @@ def _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, time
         d.power_on(0)
         drives[n] = d
     before = {n: drive_state(d) for n, d in drives.items()}
+    wear_before = {n: drive_wear(d) for n, d in drives.items()}
     if prepare_bus:
         prepare_bus(bus, drives)
     sim = CoSim(plc, bus, mailbox=MAILBOX, name="plc")
@@ -370,7 +386,7 @@ def _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, time
     after_result = after(plc, sim, drives) if after is not None and commissioned else None
     res = RunResult(opts, nodes, plc.tick_ns, bus.bit_ns, sampler.axes, list(bus.trace), drives,
                     scans=sim.scans, wall_s=wall, timed_out=timed_out, fault=fault, before=before,
-                    interrupted=interrupted, after=after_result)
+                    interrupted=interrupted, after=after_result, wear_before=wear_before)
     res.stats = bus.stats(res.t_start_ns, max(res.t_end_ns, res.t_start_ns))
     return res
 
@@ -435,6 +451,7 @@ def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s, a
                 drive_buses.append(opened())
                 drives[n] = factory(n)
         before = {n: drive_state(d) for n, d in drives.items()}
+        wear_before = {n: drive_wear(d) for n, d in drives.items()}
         # the PLC's own frames come back once sent: the mailbox's transmit confirmation (TxEcho), where
         # the interface can give them
         try:
@@ -478,6 +495,6 @@ def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s, a
     res = RunResult(opts, nodes, plc.tick_ns, bit_ns, sampler.axes, trace, drives, scans=sim.scans,
                     wall_s=wall, timed_out=timed_out, fault=fault, overruns=sim.overruns,
                     max_lateness_ns=sim.max_lateness_ns, skipped_ticks=sim.skipped_ticks, before=before,
-                    interrupted=interrupted, after=after_result)
+                    interrupted=interrupted, after=after_result, wear_before=wear_before)
     res.stats = bus_stats(trace, bit_ns, res.t_start_ns, max(res.t_end_ns, res.t_start_ns))
     return res
