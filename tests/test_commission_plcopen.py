@@ -101,6 +101,7 @@ def reference_requests() -> list[bytes]:
 def test_done_held_while_execute_then_reset_on_falling_edge():
     b = ComBench()
     fb = b.fb("COM")
+    fb["FORCE"] = True                   # the full write: its exchanges are known from the dataset
     states = run_recording(b, fb, execute_scans=None)
     first = next(i for i, s in enumerate(states) if s[0])
     assert all(s[1] for s in states[:first]), "Busy from the Execute scan until Done"
