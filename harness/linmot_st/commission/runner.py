@@ -167,6 +167,7 @@ class RunResult:
     stats: Any = None                          # BusStats over the commissioning span
     before: dict = field(default_factory=dict)  # node ID -> verify.drive_state() when switched on
     wear_before: dict = field(default_factory=dict)  # node ID -> drive_wear() when switched on
+    wear_after: dict = field(default_factory=dict)   # and at the end of the run
     after: Any = None                          # what run(after=...) returned (the motion job's result)
 
     @property
@@ -181,10 +182,9 @@ class RunResult:
 
     def wear(self, node: int) -> dict | None:
         """What the run cost the emulated drive's non-volatile memory: flash saves per store, ROM writes."""
-        d = self.drives.get(node)
-        if d is None or node not in self.wear_before:
+        if node not in self.wear_before or node not in self.wear_after:
             return None
-        now, then = drive_wear(d), self.wear_before[node]
+        now, then = self.wear_after[node], self.wear_before[node]
         return {k: now[k] - then[k] for k in now}
 
     @property
@@ -386,7 +386,8 @@ def _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, time
     after_result = after(plc, sim, drives) if after is not None and commissioned else None
     res = RunResult(opts, nodes, plc.tick_ns, bus.bit_ns, sampler.axes, list(bus.trace), drives,
                     scans=sim.scans, wall_s=wall, timed_out=timed_out, fault=fault, before=before,
-                    interrupted=interrupted, after=after_result, wear_before=wear_before)
+                    interrupted=interrupted, after=after_result, wear_before=wear_before,
+                    wear_after={n: drive_wear(d) for n, d in drives.items()})
     res.stats = bus.stats(res.t_start_ns, max(res.t_end_ns, res.t_start_ns))
     return res
 
@@ -495,6 +496,7 @@ def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s, a
     res = RunResult(opts, nodes, plc.tick_ns, bit_ns, sampler.axes, trace, drives, scans=sim.scans,
                     wall_s=wall, timed_out=timed_out, fault=fault, overruns=sim.overruns,
                     max_lateness_ns=sim.max_lateness_ns, skipped_ticks=sim.skipped_ticks, before=before,
-                    interrupted=interrupted, after=after_result, wear_before=wear_before)
+                    interrupted=interrupted, after=after_result, wear_before=wear_before,
+                    wear_after={n: drive_wear(d) for n, d in drives.items()})
     res.stats = bus_stats(trace, bit_ns, res.t_start_ns, max(res.t_end_ns, res.t_start_ns))
     return res
