@@ -67,13 +67,14 @@ def test_one_axis(backend):
     assert "result: PASSED" in text and "curves                         532     532" in text
 
 
-def test_both_backends_put_the_same_frames_on_the_bus():
+@pytest.mark.parametrize("force", [True, False], ids=["full", "recommission"])
+def test_both_backends_put_the_same_frames_on_the_bus(force):
     from linmot_st.toolchain import builtin_available, matiec_available
     if not (matiec_available() and builtin_available()):
         pytest.skip("needs both MatIEC and the builtin compiler")
     traces = []
     for backend in ("matiec", "builtin"):
-        o = commission(backend, axes=1, verify=False, flash=False)
+        o = commission(backend, axes=1, verify=not force, flash=not force, force=force)
         traces.append([(e.start_ns, e.frame.can_id, e.frame.data) for e in o.result.trace])
     assert traces[0] == traces[1]
 
