@@ -10,6 +10,7 @@ from linmot_st.cli import main
 from linmot_st.commission.testing import EXAMPLE, commission, example
 from linmot_st.emulator import DriveTimings, E1100Drive
 from linmot_st.emulator.curves import Curve
+from linmot_st.errors import BY_NAME
 from linmot_st.pvl.dataset import INFO_WORDS, from_pvl
 
 DS = from_pvl(example())
@@ -160,32 +161,74 @@ class RefusesTheFirstSave(E1100Drive):
         return super().stop_mc()
 
 
+class Station:
+    """plc_project and one drive on the simulated bus, kept over several runs (Start falls and rises: the
+    same PLC, so the FB's memory of what an earlier run left unsaved is kept too)."""
+
+    def __init__(self, drive) -> None:
+        from linmot_st.bus import SimBus
+        from linmot_st.commission.project import INSTANCE, MAILBOX
+        from linmot_st.commission.runner import RunOptions, _configure
+        from linmot_st.commission.testing import project_build
+        from linmot_st.cosim import CoSim
+        from linmot_st.plc import Plc
+
+        self.plc, self.drive, self.main = Plc(project_build()), drive, INSTANCE
+        bus = SimBus(500_000)
+        bus.attach(drive, "drive1")
+        drive.power_on(0)
+        self.sim = CoSim(self.plc, bus, mailbox=MAILBOX)
+        _configure(self.plc, RunOptions(axes=1, reset=False, timings="fast"), [1], drive.curves.capacity_bytes)
+        self.plc[f"{INSTANCE}.START"] = False
+        self.com = f"{INSTANCE}.A1.COM"
+
+    def run(self, motion_enabled: bool = False, force: bool = False):
+        """One run from a Start edge to Done or Error; with motion_enabled the axis counts as powered (as
+        FB_LmPdo says while the drive runs a motion) in every scan."""
+        plc = self.plc
+        plc[f"{self.main}.A1.FORCE"] = force
+        self.sim.step(2)
+        plc[f"{self.main}.START"] = True
+
+        def finished() -> bool:
+            if motion_enabled:
+                plc[f"{self.main}.A1.AX.MOTIONENABLED"] = True
+            return bool(plc[f"{self.com}.ERROR"] or plc[f"{self.com}.DONE"])
+        self.sim.run_until(finished, max_scans=60_000)
+        plc[f"{self.main}.START"] = False
+        return plc[self.com]
+
+
 def test_a_save_that_failed_is_done_by_the_next_run_although_ram_matches():
     """RAM holds the dataset after a failed save, the flash does not: the FB remembers it (same PLC)."""
-    from linmot_st.bus import SimBus
-    from linmot_st.commission.project import INSTANCE, MAILBOX
-    from linmot_st.commission.runner import RunOptions, _configure
-    from linmot_st.commission.testing import project_build
-    from linmot_st.cosim import CoSim
-    from linmot_st.plc import Plc
-
-    plc = Plc(project_build())
-    bus = SimBus(500_000)
-    d = RefusesTheFirstSave(1, timings=DriveTimings.fast())
-    bus.attach(d, "drive1")
-    d.power_on(0)
-    sim = CoSim(plc, bus, mailbox=MAILBOX)
-    _configure(plc, RunOptions(axes=1, reset=False, timings="fast"), [1], d.curves.capacity_bytes)
-    com = f"{INSTANCE}.A1.COM"
-    sim.run_until(lambda: plc[f"{com}.ERROR"] or plc[f"{com}.DONE"], max_scans=60_000)
-    assert plc[f"{com}.ERROR"] and plc[f"{com}.ERRORID"] == 0x04D7 and d.curves.flash != d.curves.ram
-    plc[f"{INSTANCE}.START"] = False
-    sim.step(2)
-    plc[f"{INSTANCE}.START"] = True
-    sim.run_until(lambda: plc[f"{com}.ERROR"] or plc[f"{com}.DONE"], max_scans=60_000)
-    assert plc[f"{com}.DONE"] and plc[f"{com}.WRITTEN"] == 0 and plc[f"{com}.SKIPPED"] == ITEMS
+    st = Station(RefusesTheFirstSave(1, timings=DriveTimings.fast()))
+    d = st.drive
+    com = st.run()
+    assert com["ERROR"] and com["ERRORID"] == 0x04D7 and d.curves.flash != d.curves.ram
+    com = st.run()
+    assert com["DONE"] and com["WRITTEN"] == 0 and com["SKIPPED"] == ITEMS
     assert d.curves.flash == d.curves.ram and d.ct.flash == d.ct.ram
     assert d.flash_cycles == {"curves": 1, "ct": 1}
+
+
+def test_under_a_powered_axis_only_a_run_that_needs_no_save_or_reset_goes_on():
+    from linmot_st.commission.verify import drive_state
+
+    st = Station(E1100Drive(1, timings=DriveTimings.fast()))
+    d = st.drive
+    assert st.run()["DONE"]
+    com = st.run(motion_enabled=True)                          # nothing differs: checked, nothing needed
+    assert com["DONE"] and com["WRITTEN"] == 0
+    cid = DS.curves[0][0]
+    data = bytearray(d.curves.ram[cid].data)
+    data[0] ^= 0x01
+    d.curves.ram[cid] = Curve(cid, d.curves.ram[cid].info, bytes(data))
+    before = drive_state(d)
+    com = st.run(motion_enabled=True)                          # a curve differs: the save would stop the MC
+    assert com["ERROR"] and com["ERRORID"] == BY_NAME["AxisEnabled"].value and com["FAILPHASE"] == "LM_COM_COMPARE"
+    assert drive_state(d) == before                            # refused before any write
+    com = st.run(motion_enabled=True, force=True)              # the full write is refused at the edge
+    assert com["ERROR"] and com["ERRORID"] == BY_NAME["AxisEnabled"].value and com["EXCHANGES"] == 0
 
 
 def test_the_command_re_commissions_drives_kept_in_a_folder(tmp_path, capsys):
