@@ -52,6 +52,12 @@ def matiec_library_names() -> frozenset[str]:
     return frozenset(data["names"])
 
 
+# MatIEC's library declares these blocks beyond IEC's (stdfb.NON_STANDARD), and iec2c knows their names before
+# it reads the user's code: as a user's identifier each is a syntax error (or an internal error of iec2c)
+NON_STANDARD_NAME = ("'{name}' cannot name {what}: it is the name of a function block of MatIEC's own library "
+                     "(not an IEC standard block, and not provided by the builtin compiler), which iec2c refuses "
+                     "as an identifier; choose another name")
+
 FLT_MAX, FLT_MIN = 3.4028234663852886e38, 1.1754943508222875e-38
 
 
@@ -180,6 +186,8 @@ class Checker:
             self.error(pos, f"'{name}' is already declared as a {self.pous[k].kind}")
         if k in stdfb.names() and not self._std_mode:
             self.error(pos, f"'{name}' is the name of a standard function block")
+        if k in stdfb.NON_STANDARD and not self._std_mode:
+            self.error(pos, NON_STANDARD_NAME.format(name=name, what=_a(what)))
         return k
 
     # ------------------------------------------------------------------ types
@@ -320,6 +328,11 @@ class Checker:
         values, spelled = [], []
         for v, pos in spec.values:
             k = self.check_identifier(v, pos, "enumerated value")
+            if k in stdfb.NON_STANDARD and not self._std_mode:
+                self.error(pos, NON_STANDARD_NAME.format(name=v, what="an enumerated value"))
+            if k in stdfb.names() and not self._std_mode:
+                self.error(pos, f"'{v}' is the name of a standard function block and cannot name an enumerated "
+                                "value (MatIEC refuses it: iec2c reads the name as the block's)")
             if k in values:
                 self.error(pos, f"duplicate enumerated value '{v}'")
             values.append(k)
@@ -468,7 +481,15 @@ class Checker:
 
     # ------------------------------------------------------------------ POUs
     def declare_pou(self, node: A.Pou) -> None:
-        k = self.check_global_name(node.name, node.pos, node.kind.lower().replace("_", " "))
+        try:
+            k = self.check_global_name(node.name, node.pos, node.kind.lower().replace("_", " "))
+        except _Abort:
+            if node.name.upper() not in self.pous:     # a duplicate leaves the first declaration usable
+                self.failed_pous.add(node.name.upper())
+            raise
+        if not node.blocks and not node.std:
+            self.error(node.pos, f"{node.kind} {node.name} declares no variables: MatIEC's grammar needs at least "
+                                 "one VAR... END_VAR block in every POU (iec2c refuses it with a syntax error)")
         pou = PouSym(node.name, k, node.kind, node.pos, node, std=node.std,
                      no_code=not self.code_generation and not node.std)
         if node.kind != "FUNCTION":
@@ -518,12 +539,18 @@ class Checker:
     def declare_block(self, pou: PouSym, block: A.VarBlock) -> None:
         kind, qual = block.kind, block.qualifier
         allowed = {
-            "FUNCTION": {"VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_TEMP"},
+            "FUNCTION": {"VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT"},
             "FUNCTION_BLOCK": {"VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_TEMP", "VAR_EXTERNAL"},
             "PROGRAM": {"VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_TEMP", "VAR_EXTERNAL"},
         }[pou.kind]
+        if kind == "VAR_TEMP" and pou.kind == "FUNCTION":
+            self.error(block.pos, "VAR_TEMP is not allowed in a FUNCTION: MatIEC refuses it (its grammar has no "
+                                  "VAR_TEMP in a FUNCTION, whose VAR variables are temporary anyway); use VAR")
         if kind not in allowed:
             self.error(block.pos, f"{kind} is not allowed in a {pou.kind} (outside the supported subset)")
+        if not block.decls and not pou.std:
+            self.error(block.pos, f"an empty {kind} ... END_VAR block: MatIEC refuses a block that declares no "
+                                  "variable ('no variable declared'); remove it")
         if qual == "CONSTANT" and kind not in ("VAR", "VAR_EXTERNAL"):
             self.error(block.pos, f"{kind} CONSTANT is outside the supported subset")
         if qual == "PERSISTENT":
@@ -609,6 +636,11 @@ class Checker:
                 self.error(pos, f"variable '{name}' has the name of a type (MatIEC rejects this)")
             if k in self.pous or (k in stdfb.names() and not self._std_mode):
                 self.error(pos, f"variable '{name}' has the name of a POU (MatIEC rejects this)")
+            if k in stdfb.NON_STANDARD and not self._std_mode:
+                self.error(pos, NON_STANDARD_NAME.format(name=name, what="a variable"))
+            if pou is not None and pou.result is None and k == pou.key:
+                self.error(pos, f"variable '{name}' has the name of its own {pou.kind}: MatIEC refuses it (iec2c "
+                                "reads the name as the POU's, reports a syntax error, and may then crash)")
             if k in table or (pou is not None and pou.result is not None and k == pou.key):
                 self.error(pos, f"duplicate declaration of '{name}'")
             v = Var(name, k, ty, kind, pos, constant=(qual == "CONSTANT"), init=decl.init,
@@ -742,6 +774,8 @@ class Checker:
         if any(r.key == k for r in res.config.resources) or k == res.key:
             self.error(node.pos, f"program instance '{node.name}' has the name of a resource (MatIEC rejects it)")
         pou = self.pous.get(node.type_name.upper())
+        if pou is None and node.type_name.upper() in self.failed_pous:
+            raise _Abort     # its declaration was rejected, and reported
         if pou is None or pou.kind != "PROGRAM":
             self.error(node.type_pos, f"'{node.type_name}' is not a PROGRAM declared before the configuration")
         self.check_has_code(pou, node.type_pos)
@@ -1737,6 +1771,10 @@ def _has_index(e: A.Node) -> bool:
 def _selectable(t: T.Type) -> bool:
     tb = t.base()
     return isinstance(tb, T.Elem)
+
+
+def _a(noun: str) -> str:
+    return ("an " if noun[0] in "aeiou" else "a ") + noun
 
 
 def _hint(found: T.Type, want: T.Type) -> str:
