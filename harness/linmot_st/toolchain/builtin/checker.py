@@ -21,6 +21,7 @@ from . import nesting, stdfb
 from . import stdfuncs as SF
 from . import types as T
 from .errors import BuiltinCompileError, Diagnostic
+from .parser import C_PRAGMA, is_c_pragma
 from .symbols import ConfigSym, LocatedCell, PouSym, ProgInst, Program, ResourceSym, TaskSym, Var
 
 KEYWORDS = {
@@ -148,6 +149,8 @@ class Checker:
                     self.code_generation = False
                 elif isinstance(el, A.Pragma) and ENABLE_CODE.fullmatch(el.text):
                     self.code_generation = True
+                elif isinstance(el, A.Pragma) and is_c_pragma(el.text):
+                    self.error(el.pos, C_PRAGMA)
                 elif isinstance(el, A.Pragma):
                     self.error(el.pos, f"pragma {el.text!r} is outside the supported subset (only "
                                        "{#include \"file\"}, {disable code generation} and {enable code generation} "
@@ -889,6 +892,8 @@ class Checker:
                 self.error(s.pos, f"{'EXIT' if isinstance(s, A.Exit) else 'CONTINUE'} outside a loop")
         elif isinstance(s, A.Return):
             pass
+        elif isinstance(s, A.PragmaStmt) and is_c_pragma(s.text):
+            self.error(s.pos, C_PRAGMA)
         elif isinstance(s, A.PragmaStmt):
             self.error(s.pos, "pragmas in a body (C code) are outside the supported subset")
         else:
@@ -1178,6 +1183,10 @@ class Checker:
                               "s and ms)")
         if e.kind == "string":
             self.check_string_escapes(e)
+            self.check_string_ascii(e)
+        if e.kind == "string" and tn is not None:
+            self.error(e.pos, f"{tn}#{e.text}: a typed string literal is outside the supported subset (MatIEC's "
+                              "grammar has no typed string literals and refuses it); write the string alone")
         if e.kind == "real" and outside_float_range(e.text):
             self.error(e.pos, f"the real literal {e.text} is outside the range MatIEC accepts for any real "
                               "literal, LREAL included (it reads them as 32-bit floats: 1.18E-38 to 3.40E38 in "
@@ -1228,6 +1237,14 @@ class Checker:
                 i += 1 + max(width, 1)
                 continue
             i += 1
+
+    def check_string_ascii(self, e: A.Literal) -> None:
+        """MatIEC's lexer takes only 7-bit characters in a string literal (a byte above 127 is no token)."""
+        bad = next((ch for ch in e.text if ord(ch) > 127), None)
+        if bad is not None:
+            self.error(e.pos, f"the string literal contains the non-ASCII character {bad!r}, which MatIEC refuses "
+                              "(its lexer knows 7-bit characters only in a string literal); write each byte as "
+                              "$hh, e.g. $E9")
 
     def _string_lit(self, e: A.Literal) -> T.Type:
         if len(e.value) > T.STR_MAX_LEN:
