@@ -116,6 +116,7 @@ class Checker:
         self._std_ast: dict[str, A.Pou] | None = None
         self._std_mode = False
         self.config_names: set[str] = set()
+        self.externals_reported: set[Var] = set()   # VAR_EXTERNALs already reported as without a global
         self.failed_pous: set[str] = set()   # POUs whose declaration was rejected: uses are not reported
         self.code_generation = True          # off between {disable code generation} and {enable ...}
 
@@ -157,6 +158,7 @@ class Checker:
                                        "are supported)")
             except _Abort:
                 pass
+        self.check_externals_declared()
         if self.diags:
             raise BuiltinCompileError(self.diags)
         return Program(self.type_order, list(self.pous.values()), self.config, self.located, files)
@@ -812,6 +814,7 @@ class Checker:
             where = f" (used by {pou.name})"
             if g is None:
                 self.report(pos, f"VAR_EXTERNAL '{ext.name}' of {pou.name} has no VAR_GLOBAL in resource {res.name}")
+                self.externals_reported.add(ext)
                 continue
             if T.ERROR in (g.ty, ext.ty):
                 continue
@@ -825,6 +828,26 @@ class Checker:
         for v in pou.vars.values():
             if v.kind in ("VAR_INPUT", "VAR_IN_OUT") and v.is_fb_instance:
                 self.check_externals(v.ty.pou, res, pos, seen)
+
+    def check_externals_declared(self) -> None:
+        """Every VAR_EXTERNAL of a POU that gets C needs a VAR_GLOBAL of that name somewhere in the CONFIGURATION:
+        iec2c accepts one without, but its C then calls __GET_GLOBAL_<name>, which nothing declares."""
+        declared: set[str] = set()
+        if self.config is not None:
+            declared.update(self.config.globals)
+            for res in self.config.resources:
+                declared.update(res.globals)
+        for pou in self.pous.values():
+            if pou.std or pou.no_code:
+                continue
+            for ext in pou.externals:
+                if ext.key in declared or ext in self.externals_reported:
+                    continue
+                where = ("the CONFIGURATION has no VAR_GLOBAL of that name" if self.config else
+                         "there is no CONFIGURATION to declare its VAR_GLOBAL")
+                self.report(ext.pos, f"VAR_EXTERNAL '{ext.name}' of {pou.name}: {where}. MatIEC's iec2c accepts "
+                                     f"this, but the C it generates does not compile (__GET_GLOBAL_{ext.key} is "
+                                     "never declared); build the POU with a CONFIGURATION that declares the global")
 
     # ------------------------------------------------------------------ bodies
     def check_body(self, pou: PouSym) -> None:
