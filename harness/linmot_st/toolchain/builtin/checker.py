@@ -17,7 +17,7 @@ import re
 from pathlib import Path
 
 from . import ast as A
-from . import nesting, stdfb
+from . import matiec_c_macros, nesting, stdfb
 from . import stdfuncs as SF
 from . import types as T
 from .errors import BuiltinCompileError, Diagnostic
@@ -52,6 +52,10 @@ def matiec_library_names() -> frozenset[str]:
     data = json.loads((Path(__file__).with_name("matiec_lib_names.json")).read_text())
     return frozenset(data["names"])
 
+
+# what iec2c writes into its C under the ST name itself (enumerated values, program instances, resources and
+# the configuration get a prefix there): these cannot take a C macro's name
+C_NAMED = {"variable", "field", "type", "function", "function block", "program", "task"}
 
 # MatIEC's library declares these blocks beyond IEC's (stdfb.NON_STANDARD), and iec2c knows their names before
 # it reads the user's code: as a user's identifier each is a syntax error (or an internal error of iec2c)
@@ -174,6 +178,10 @@ class Checker:
             self.error(pos, f"'{name}' is a reserved word and cannot name a {what}")
         if SF.is_std_function(k) or k in SF.MISSING_IN_MATIEC_C:
             self.error(pos, f"'{name}' is the name of a standard function and cannot name a {what}")
+        if k in matiec_c_macros.names() and what in C_NAMED and not self._std_mode:
+            self.error(pos, f"'{name}' cannot name {_a(what)}: it is a C macro of the headers MatIEC's generated C "
+                            f"includes, and iec2c writes the name into that C as it is ({k}), where the preprocessor "
+                            "replaces it and the C does not compile; choose another name")
         if k in self.config_names and what != "configuration" and not self._std_mode:
             self.error(pos, f"'{name}' is the name of the CONFIGURATION and cannot name a {what} (MatIEC rejects "
                             "it: with -p, iec2c knows the configuration's name before it reads the POUs)")
