@@ -121,6 +121,7 @@ class Checker:
         self._std_mode = False
         self.config_names: set[str] = set()
         self.externals_reported: set[Var] = set()   # VAR_EXTERNALs already reported as without a global
+        self.failed_tasks: set[str] = set()  # tasks whose declaration was rejected: uses are not reported
         self.failed_pous: set[str] = set()   # POUs whose declaration was rejected: uses are not reported
         self.code_generation = True          # off between {disable code generation} and {enable ...}
 
@@ -162,7 +163,8 @@ class Checker:
                                        "are supported)")
             except _Abort:
                 pass
-        self.check_externals_declared()
+        if self.config is not None or not self.config_names:    # (a rejected CONFIGURATION declares nothing)
+            self.check_externals_declared()
         if self.diags:
             raise BuiltinCompileError(self.diags)
         return Program(self.type_order, list(self.pous.values()), self.config, self.located, files)
@@ -178,6 +180,11 @@ class Checker:
             self.error(pos, f"'{name}' is a reserved word and cannot name a {what}")
         if SF.is_std_function(k) or k in SF.MISSING_IN_MATIEC_C:
             self.error(pos, f"'{name}' is the name of a standard function and cannot name a {what}")
+        if k in stdfb.NON_STANDARD and what != "field" and not self._std_mode:
+            self.error(pos, NON_STANDARD_NAME.format(name=name, what=_a(what)))
+        if k in stdfb.names() and what != "field" and not self._std_mode:
+            self.error(pos, f"'{name}' is the name of a standard function block and cannot name {_a(what)} (MatIEC "
+                            "refuses it: iec2c reads the name as the block's)")
         if k in matiec_c_macros.names() and what in C_NAMED and not self._std_mode:
             self.error(pos, f"'{name}' cannot name {_a(what)}: it is a C macro of the headers MatIEC's generated C "
                             f"includes, and iec2c writes the name into that C as it is ({k}), where the preprocessor "
@@ -197,10 +204,6 @@ class Checker:
             self.error(pos, f"'{name}' is already declared as a type")
         if k in self.pous:
             self.error(pos, f"'{name}' is already declared as a {self.pous[k].kind}")
-        if k in stdfb.names() and not self._std_mode:
-            self.error(pos, f"'{name}' is the name of a standard function block")
-        if k in stdfb.NON_STANDARD and not self._std_mode:
-            self.error(pos, NON_STANDARD_NAME.format(name=name, what=_a(what)))
         return k
 
     # ------------------------------------------------------------------ types
@@ -341,11 +344,6 @@ class Checker:
         values, spelled = [], []
         for v, pos in spec.values:
             k = self.check_identifier(v, pos, "enumerated value")
-            if k in stdfb.NON_STANDARD and not self._std_mode:
-                self.error(pos, NON_STANDARD_NAME.format(name=v, what="an enumerated value"))
-            if k in stdfb.names() and not self._std_mode:
-                self.error(pos, f"'{v}' is the name of a standard function block and cannot name an enumerated "
-                                "value (MatIEC refuses it: iec2c reads the name as the block's)")
             if k in values:
                 self.error(pos, f"duplicate enumerated value '{v}'")
             values.append(k)
@@ -647,10 +645,8 @@ class Checker:
                 self.error(pos, f"'{name}' is reserved (implicit parameter of every POU)")
             if k in self.types:
                 self.error(pos, f"variable '{name}' has the name of a type (MatIEC rejects this)")
-            if k in self.pous or (k in stdfb.names() and not self._std_mode):
+            if k in self.pous:
                 self.error(pos, f"variable '{name}' has the name of a POU (MatIEC rejects this)")
-            if k in stdfb.NON_STANDARD and not self._std_mode:
-                self.error(pos, NON_STANDARD_NAME.format(name=name, what="a variable"))
             if pou is not None and pou.result is None and k == pou.key:
                 self.error(pos, f"variable '{name}' has the name of its own {pou.kind}: MatIEC refuses it (iec2c "
                                 "reads the name as the POU's, reports a syntax error, and may then crash)")
@@ -724,7 +720,7 @@ class Checker:
                 try:
                     res.tasks.append(self.declare_task(tnode, res))
                 except _Abort:
-                    pass
+                    self.failed_tasks.add(tnode.name.upper())
             for pnode in rnode.programs:
                 try:
                     res.programs.append(self.declare_program_instance(pnode, res))
@@ -734,7 +730,7 @@ class Checker:
                 if g.is_fb_instance:
                     self.check_externals(g.ty.pou, res, g.pos, set())
             cfg.resources.append(res)
-        if not any(t.interval_ns for r in cfg.resources for t in r.tasks):
+        if not any(t.interval_ns for r in cfg.resources for t in r.tasks) and not self.failed_tasks:
             self.report(node.pos, "at least one periodic TASK (with an INTERVAL) is required (MatIEC)")
         self.config = cfg
 
@@ -795,6 +791,8 @@ class Checker:
         task = None
         if node.task:
             task = next((t for t in res.tasks if t.key == node.task.upper()), None)
+            if task is None and node.task.upper() in self.failed_tasks:
+                raise _Abort     # its declaration was rejected, and reported
             if task is None:
                 self.error(node.pos, f"unknown task '{node.task}'")
         if node.bindings:
