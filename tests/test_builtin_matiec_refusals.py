@@ -9,6 +9,7 @@ import pytest
 
 from linmot_st.toolchain.builtin import BuiltinCompileError, check_text, stdfb
 from linmot_st.toolchain.builtin.matiec_c_macros import names as c_macro_names
+from linmot_st.toolchain.testing import requires_matiec
 
 MAIN = "PROGRAM rf_main\n  VAR i : INT; END_VAR\n  i := i + 1;\nEND_PROGRAM\n"
 CONFIG = ("CONFIGURATION {cfg}\n  {glob}RESOURCE {res} ON PLC\n    TASK {task}(INTERVAL := T#10ms, PRIORITY := 0);\n"
@@ -32,7 +33,7 @@ PLACES = {
     "configuration": MAIN + CONFIG.format(**{**NAMES, "cfg": "{n}"}),
 }
 # where iec2c's C holds the name as it is (tests/test_builtin_c_macros.py shows it with iec2c + gcc)
-C_NAMED = {"function block", "function", "program", "type", "variable", "output", "global", "field", "task"}
+C_NAMED = {"function block", "function", "program", "type", "variable", "output", "field", "task"}
 # where MatIEC refuses the name of one of its library's blocks (everywhere but a field)
 BLOCK_NAMED = set(PLACES) - {"field"}
 
@@ -172,3 +173,93 @@ def test_c_pragmas_get_their_own_message(where, pos):
 def test_other_pragmas_keep_their_message():
     (msg,) = diagnostics("PROGRAM rf_main\n  VAR i : INT; END_VAR\n  { something }\n  i := 1;\nEND_PROGRAM\n")
     assert "pragmas in a body (C code) are outside the supported subset" in msg
+
+
+def test_a_missing_global_accessor_is_explained_as_such():
+    from linmot_st.toolchain import _explain_matiec_c_errors
+    line = "accessor.h:71:30: error: implicit declaration of function '__GET_GLOBAL_G1' [-Werror=implicit-function-declaration]"
+    notes = _explain_matiec_c_errors([line])[1:]
+    assert len(notes) == 1 and "no VAR_GLOBAL G1 in the CONFIGURATION" in notes[0]
+    wrapper = "x.c:9:5: error: implicit declaration of function '__MAIN_MOVE_INT2' [-Werror=implicit-function-declaration]"
+    assert "call wrapper" in _explain_matiec_c_errors([wrapper])[1]
+
+
+# ---- MatIEC, where installed: what it does with each of these ------------------------------------------
+
+def matiec_builds(src: str, folder) -> bool:
+    from linmot_st.toolchain import CompileError
+    from linmot_st.toolchain.testing import build_text
+    try:
+        build_text(src, folder, "matiec", name="rf.st")
+    except CompileError:
+        return False
+    return True
+
+
+@requires_matiec
+@pytest.mark.matiec
+def test_stored_c_macros_hold_every_one_this_host_defines():
+    from linmot_st.toolchain import matiec
+    from linmot_st.toolchain.builtin.matiec_c_macros import derive
+    from linmot_st.toolchain.cc import find_compiler
+    missing = set(derive(matiec.find().include, find_compiler().path)) - c_macro_names()
+    assert not missing, f"regenerate matiec_c_macros.json (see matiec_c_macros.py): {sorted(missing)}"
+
+
+@requires_matiec
+@pytest.mark.matiec
+@pytest.mark.parametrize("name", ["NAN", "INFINITY", "EOF", "INT_MAX", "HUGE_VAL", "M_PI", "FLT_MAX", "BUFSIZ",
+                                  "RAND_MAX", "CHAR_BIT", "Seek_Set", "IEC_TYPES_H"])
+def test_c_macro_names_break_matiecs_c(name, tmp_path):
+    """iec2c takes the program; gcc does not compile its C. A plain name in the same place builds."""
+    assert not matiec_builds(source("variable", name), tmp_path / "macro")
+    assert matiec_builds(source("variable", name + "_X"), tmp_path / "plain")
+
+
+@requires_matiec
+@pytest.mark.matiec
+@pytest.mark.parametrize("place", PLACES)
+def test_matiec_agrees_on_the_places_of_c_macro_names(place, tmp_path):
+    assert matiec_builds(source(place, "Eof"), tmp_path) == (place not in C_NAMED)
+
+
+@requires_matiec
+@pytest.mark.matiec
+@pytest.mark.parametrize("place", PLACES)
+def test_matiec_agrees_on_the_places_of_block_names(place, tmp_path):
+    assert matiec_builds(source(place, "Rtc"), tmp_path) == (place not in BLOCK_NAMED)
+
+
+@requires_matiec
+@pytest.mark.matiec
+def test_matiecs_own_blocks_are_those_beyond_the_standard():
+    """stdfb.NON_STANDARD is what MatIEC's lib/*.txt declares beyond the IEC blocks the builtin provides."""
+    import re
+    from linmot_st.toolchain import matiec
+    declared = set()
+    for path in matiec.find().lib.glob("*.txt"):
+        text = re.sub(r"\(\*.*?\*\)", " ", path.read_text(errors="replace"), flags=re.S)
+        declared |= {m.upper() for m in re.findall(r"(?im)^\s*FUNCTION_BLOCK\s+(\w+)", text)}
+    assert declared - stdfb.names() == stdfb.NON_STANDARD
+
+
+@requires_matiec
+@pytest.mark.matiec
+@pytest.mark.parametrize("kind", ["FUNCTION rf_nv : INT", "FUNCTION_BLOCK rf_nv", "PROGRAM rf_nv"])
+def test_matiec_refuses_a_pou_without_any_var_block(kind, tmp_path):
+    end = "END_" + kind.split()[0]
+    body = "rf_nv := 1;" if kind.startswith("FUNCTION ") else "RETURN;"
+    assert not matiec_builds(f"{kind}\n  {body}\n{end}\n" + MAIN + CONFIG.format(**NAMES), tmp_path)
+
+
+@requires_matiec
+@pytest.mark.matiec
+def test_matiec_backend_names_the_external_without_its_global(tmp_path):
+    from linmot_st.toolchain import CompileError
+    from linmot_st.toolchain.testing import build_text
+    with pytest.raises(CompileError) as info:
+        build_text("FUNCTION_BLOCK rf_ext\n  VAR_EXTERNAL g1 : INT; END_VAR\n  g1 := g1 + 1;\nEND_FUNCTION_BLOCK\n",
+                   tmp_path, "matiec")
+    text = "\n".join(info.value.diagnostics)
+    assert "no VAR_GLOBAL G1 in the CONFIGURATION" in text
+    assert "call wrapper" not in text

@@ -53,8 +53,9 @@ def matiec_library_names() -> frozenset[str]:
     return frozenset(data["names"])
 
 
-# what iec2c writes into its C under the ST name itself (enumerated values, program instances, resources and
-# the configuration get a prefix there): these cannot take a C macro's name
+# what iec2c writes into its C under the ST name itself (enumerated values, program instances, resources, the
+# configuration and its globals get a prefix there): these cannot take a C macro's name. A global's VAR_EXTERNAL
+# is a variable, so only a global that no POU uses can be named so
 C_NAMED = {"variable", "field", "type", "function", "function block", "program", "task"}
 
 # MatIEC's library declares these blocks beyond IEC's (stdfb.NON_STANDARD), and iec2c knows their names before
@@ -640,7 +641,7 @@ class Checker:
             self.const_value(decl.init, ty)
         out = []
         for name, pos in decl.names:
-            k = self.check_identifier(name, pos, "variable")
+            k = self.check_identifier(name, pos, "variable" if pou is not None else "global variable")
             if k in ("EN", "ENO"):
                 self.error(pos, f"'{name}' is reserved (implicit parameter of every POU)")
             if k in self.types:
