@@ -104,6 +104,12 @@ def test_empty_blocks(block):
     assert msg.startswith("rf.st:3:3: error: an empty ") and "MatIEC refuses a block that declares no variable" in msg
 
 
+def test_var_temp_in_a_function_is_one_error():
+    (msg,) = diagnostics("FUNCTION rf_t : INT\n  VAR_INPUT a : INT; END_VAR\n  VAR_TEMP t : INT; END_VAR\n  t := a;\n"
+                         "  rf_t := t;\nEND_FUNCTION\n" + MAIN)
+    assert msg.startswith("rf.st:3:3: error: VAR_TEMP is not allowed in a FUNCTION: MatIEC refuses it")
+
+
 def test_var_temp_is_fine_outside_functions():
     check_text("FUNCTION_BLOCK rf_t\n  VAR_INPUT a : INT; END_VAR\n  VAR_TEMP t : INT; END_VAR\n  t := a;\n"
                "END_FUNCTION_BLOCK\n" + MAIN)

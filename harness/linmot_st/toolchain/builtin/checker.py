@@ -556,7 +556,8 @@ class Checker:
             "PROGRAM": {"VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_TEMP", "VAR_EXTERNAL"},
         }[pou.kind]
         if kind == "VAR_TEMP" and pou.kind == "FUNCTION":
-            self.error(block.pos, "VAR_TEMP is not allowed in a FUNCTION: MatIEC refuses it (its grammar has no "
+            kind = "VAR"     # declared all the same, so that their uses add no "not declared"
+            self.report(block.pos, "VAR_TEMP is not allowed in a FUNCTION: MatIEC refuses it (its grammar has no "
                                   "VAR_TEMP in a FUNCTION, whose VAR variables are temporary anyway); use VAR")
         if kind not in allowed:
             self.error(block.pos, f"{kind} is not allowed in a {pou.kind} (outside the supported subset)")
