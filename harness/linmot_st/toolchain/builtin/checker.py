@@ -495,13 +495,14 @@ class Checker:
     def declare_pou(self, node: A.Pou) -> None:
         try:
             k = self.check_global_name(node.name, node.pos, node.kind.lower().replace("_", " "))
+            if not node.blocks and not node.std:
+                self.error(node.pos, f"{node.kind} {node.name} declares no variables: MatIEC's grammar needs at "
+                                     "least one VAR... END_VAR block in every POU (iec2c refuses it with a syntax "
+                                     "error)")
         except _Abort:
             if node.name.upper() not in self.pous:     # a duplicate leaves the first declaration usable
                 self.failed_pous.add(node.name.upper())
             raise
-        if not node.blocks and not node.std:
-            self.error(node.pos, f"{node.kind} {node.name} declares no variables: MatIEC's grammar needs at least "
-                                 "one VAR... END_VAR block in every POU (iec2c refuses it with a syntax error)")
         pou = PouSym(node.name, k, node.kind, node.pos, node, std=node.std,
                      no_code=not self.code_generation and not node.std)
         if node.kind != "FUNCTION":
