@@ -109,6 +109,20 @@ def test_empty_blocks(block):
     assert msg.startswith("rf.st:3:3: error: an empty ") and "MatIEC refuses a block that declares no variable" in msg
 
 
+def empty_globals(where: str) -> str:
+    """A program and a CONFIGURATION with an empty VAR_GLOBAL block in it (glob) or in its resource (res)."""
+    src = MAIN + CONFIG.format(**{**NAMES, "glob": "VAR_GLOBAL END_VAR\n  "})
+    if where == "res":
+        src = src.replace("VAR_GLOBAL END_VAR\n  RESOURCE rf_res ON PLC\n", "RESOURCE rf_res ON PLC\n    VAR_GLOBAL END_VAR\n")
+    return src
+
+
+@pytest.mark.parametrize("where", ["glob", "res"])
+def test_empty_global_blocks(where):
+    (msg,) = diagnostics(empty_globals(where))
+    assert "an empty VAR_GLOBAL ... END_VAR block: MatIEC refuses" in msg
+
+
 def test_var_temp_in_a_function_is_one_error():
     (msg,) = diagnostics("FUNCTION rf_t : INT\n  VAR_INPUT a : INT; END_VAR\n  VAR_TEMP t : INT; END_VAR\n  t := a;\n"
                          "  rf_t := t;\nEND_FUNCTION\n" + MAIN)
@@ -261,6 +275,13 @@ def test_matiec_refuses_a_pou_without_any_var_block(kind, tmp_path):
     end = "END_" + kind.split()[0]
     body = "rf_nv := 1;" if kind.startswith("FUNCTION ") else "RETURN;"
     assert not matiec_builds(f"{kind}\n  {body}\n{end}\n" + MAIN + CONFIG.format(**NAMES), tmp_path)
+
+
+@requires_matiec
+@pytest.mark.matiec
+@pytest.mark.parametrize("where", ["glob", "res"])
+def test_matiec_refuses_empty_global_blocks(where, tmp_path):
+    assert not matiec_builds(empty_globals(where), tmp_path)
 
 
 @requires_matiec

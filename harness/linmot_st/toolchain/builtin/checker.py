@@ -562,9 +562,8 @@ class Checker:
                                   "VAR_TEMP in a FUNCTION, whose VAR variables are temporary anyway); use VAR")
         if kind not in allowed:
             self.error(block.pos, f"{kind} is not allowed in a {pou.kind} (outside the supported subset)")
-        if not block.decls and not pou.std:
-            self.error(block.pos, f"an empty {kind} ... END_VAR block: MatIEC refuses a block that declares no "
-                                  "variable ('no variable declared'); remove it")
+        if not pou.std:
+            self.check_not_empty(block)
         if qual == "CONSTANT" and kind not in ("VAR", "VAR_EXTERNAL"):
             self.error(block.pos, f"{kind} CONSTANT is outside the supported subset")
         if qual == "PERSISTENT":
@@ -577,6 +576,11 @@ class Checker:
                 self.declare_var(pou, kind, qual, decl)
             except _Abort:
                 pass
+
+    def check_not_empty(self, block: A.VarBlock) -> None:
+        if not block.decls:
+            self.error(block.pos, f"an empty {block.kind} ... END_VAR block: MatIEC refuses a block that declares no "
+                                  "variable ('no variable declared'); remove it")
 
     def declare_var(self, pou: PouSym | None, kind: str, qual: str | None, decl: A.VarDecl,
                     scope=None, table: dict | None = None) -> list[Var]:
@@ -740,6 +744,7 @@ class Checker:
     def declare_globals(self, block: A.VarBlock, scope, table: dict) -> None:
         if block.kind != "VAR_GLOBAL":
             self.error(block.pos, f"{block.kind} is not allowed here (only VAR_GLOBAL)")
+        self.check_not_empty(block)
         located = [d for d in block.decls if d.location]
         if located and len(located) != len(block.decls):
             self.error(block.pos, "located variables must be declared in a VAR_GLOBAL block of their own (MatIEC)")
