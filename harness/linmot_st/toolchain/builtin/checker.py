@@ -17,7 +17,7 @@ import re
 from pathlib import Path
 
 from . import ast as A
-from . import nesting, stdfb
+from . import constfold, nesting, stdfb
 from . import stdfuncs as SF
 from . import types as T
 from .errors import BuiltinCompileError, Diagnostic
@@ -107,6 +107,7 @@ class Checker:
         self.for_vars: list[Var] = []       # control variables of the FOR loops around the statement
         self.anon = 0
         self._std_ast: dict[str, A.Pou] | None = None
+        self.folder = constfold.Folder()
         self._std_mode = False
         self.config_names: set[str] = set()
         self.failed_pous: set[str] = set()   # POUs whose declaration was rejected: uses are not reported
@@ -1077,6 +1078,7 @@ class Checker:
     def settle(self, e: A.Node, t: T.Type) -> None:
         """Give a pseudo-typed expression (untyped literals, result-overloaded calls) the type t."""
         rights: list[tuple[A.Node, T.Type]] = []
+        chain: list[A.BinOp] = []
         # down a left-associative operator chain iteratively; the right operands are settled after the
         # innermost left one, the order of a recursive walk
         while isinstance(e, A.BinOp) and isinstance(e.ty, T.Pseudo):
@@ -1091,12 +1093,15 @@ class Checker:
             if op in ("AND", "OR", "XOR") and not T.is_bit(tb):
                 self.error(e.pos, f"{op} needs bit strings (BOOL, BYTE, WORD...), not {T.describe(t)}")
             e.ty = tb
+            chain.append(e)
             if op != "**":
                 rights.append((e.right, tb))
             e, t = e.left, tb
         self.settle_one(e, t)
         for right, tb in reversed(rights):
             self.settle(right, tb)
+        for b in reversed(chain):
+            self.check_constant(b, b.ty)
 
     def settle_one(self, e: A.Node, t: T.Type) -> None:
         p = e.ty
@@ -1363,7 +1368,19 @@ class Checker:
         elif op in ("AND", "OR", "XOR"):
             if not T.is_bit(tb):
                 self.error(e.pos, f"{op} needs bit strings (BOOL, BYTE, WORD, DWORD, LWORD), not {T.describe(t)}")
+        self.check_constant(e, tb)
         return tb
+
+    def check_constant(self, e: A.BinOp, tb: T.Type) -> None:
+        """Refuse a constant operation whose value does not fit its type, as MatIEC's constant folding does
+        (constfold.py), intermediate results included."""
+        v = self.folder.overflow(e, tb)
+        if v is not None:
+            shown = f"{v:g}" if isinstance(v, float) else str(v)
+            held = f"{tb.lo}..{tb.hi}" if T.is_int(tb) else "finite values" if tb is T.LREAL else \
+                "-3.4028235E38..3.4028235E38"
+            self.error(e.pos, f"constant expression overflows {T.describe(tb)}: '{e.op}' gives {shown} ({held}); "
+                              "MatIEC's constant folding refuses it, also when a later operation brings it back")
 
     @staticmethod
     def _is_zero(e: A.Node) -> bool:
