@@ -659,17 +659,17 @@ class Checker:
         for block in node.globals:
             self.declare_globals(block, cfg, cfg.globals)
         if not node.resources:
-            self.error(node.pos, "a CONFIGURATION needs at least one RESOURCE")
+            self.error(node.pos, "a CONFIGURATION needs at least one RESOURCE, or at least one PROGRAM instance")
         resource_names = {r.name.upper(): r for r in node.resources}
         for g in cfg.globals.values():
             if g.key in resource_names:
                 self.report(g.pos, f"global '{g.name}' has the name of resource {resource_names[g.key].name} "
                                    "(MatIEC rejects it)")
         for rnode in node.resources:
-            rk = self.check_identifier(rnode.name, rnode.pos, "resource")
+            rk = rnode.name.upper() if rnode.implicit else self.check_identifier(rnode.name, rnode.pos, "resource")
             if any(r.key == rk for r in cfg.resources):
                 self.error(rnode.pos, f"duplicate resource '{rnode.name}'")
-            res = ResourceSym(rnode.name, rk, rnode.pos, config=cfg)
+            res = ResourceSym(rnode.name, rk, rnode.pos, config=cfg, implicit=rnode.implicit)
             for block in rnode.globals:
                 self.declare_globals(block, res, res.globals)
             for g in res.globals.values():

@@ -305,7 +305,7 @@ class CodeGen:
             yield f"{cfg.key}__{v.key}", f"{cfg.key}.{v.key}", v, None
         for r in cfg.resources:
             for v in r.globals.values():
-                yield f"{r.key}__{v.key}", f"{cfg.key}.{r.key}.{v.key}", v, r
+                yield f"{r.key}__{v.key}", f"{r.path()}.{v.key}", v, r
 
     def global_decls(self) -> list[str]:
         lines = ["/* ---- located variables, globals, program instances */"]
@@ -1251,7 +1251,7 @@ class CodeGen:
         if cfg is not None:
             for r in cfg.resources:
                 for inst in r.programs:
-                    roots.append((f"{cfg.key}.{r.key}.{inst.key}", self.type_ref(inst.pou.ty, types),
+                    roots.append((f"{r.path()}.{inst.key}", self.type_ref(inst.pou.ty, types),
                                   f"&{r.key}__{inst.key}"))
         for cell in self.prog.located.values():
             roots.append((cell.location, self.type_ref(cell.ty, types), f"&{cell.cname}"))

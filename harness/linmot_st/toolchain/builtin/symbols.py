@@ -89,6 +89,11 @@ class ResourceSym:
     tasks: list[TaskSym] = field(default_factory=list)
     programs: list[ProgInst] = field(default_factory=list)
     config: Any = None
+    implicit: bool = False     # written without RESOURCE: left out of the variables' paths, as MatIEC does
+
+    def path(self) -> str:
+        """The prefix of the paths of its program instances and globals."""
+        return self.config.key if self.implicit else f"{self.config.key}.{self.key}"
 
 
 @dataclass(eq=False)
