@@ -37,6 +37,14 @@ KEYWORDS = {
 }
 # parameters MatIEC accepts as identifiers although they look reserved
 NOT_RESERVED = {"Q", "IN", "PT", "PRIORITY", "INTERVAL", "SINGLE"}
+# words the builtin knows only to explain them (types and object-oriented constructs outside the subset)
+# that iec2c, with the build's flags (no -r), reads as ordinary identifiers: it builds them as the name of
+# a variable, field, POU, type, enumerated value, task, resource or instance (tests/test_builtin_matiec_names.py)
+MATIEC_IDENTIFIERS = {
+    "CHAR", "WCHAR", "LTIME", "LDATE", "LTOD", "LDT", "LTIME_OF_DAY", "LDATE_AND_TIME",
+    "METHOD", "END_METHOD", "INTERFACE", "END_INTERFACE", "EXTENDS", "IMPLEMENTS", "THIS", "SUPER",
+    "POINTER", "REFERENCE", "REF_TO",
+}
 # functions outside the subset that people reach for: a clear message instead of "unknown function"
 UNSUPPORTED_FUNCTIONS = {
     "SIZEOF": "SIZEOF", "ADR": "ADR", "REF": "REF()", "LOWER_BOUND": "LOWER_BOUND", "UPPER_BOUND": "UPPER_BOUND",
@@ -160,7 +168,8 @@ class Checker:
             self.error(pos, f"identifier '{name}' contains a double underscore, which MatIEC rejects")
         if k in NOT_RESERVED:
             return k
-        if k in KEYWORDS or k in T.ELEMENTARY or k in T.ELEMENTARY_ALIASES or k in T.UNSUPPORTED_ELEMENTARY:
+        reserved = k in KEYWORDS or k in T.ELEMENTARY or k in T.ELEMENTARY_ALIASES or k in T.UNSUPPORTED_ELEMENTARY
+        if reserved and k not in MATIEC_IDENTIFIERS:
             self.error(pos, f"'{name}' is a reserved word and cannot name a {what}")
         if SF.is_std_function(k) or k in SF.MISSING_IN_MATIEC_C:
             self.error(pos, f"'{name}' is the name of a standard function and cannot name a {what}")
