@@ -171,7 +171,7 @@ class Checker:
         reserved = k in KEYWORDS or k in T.ELEMENTARY or k in T.ELEMENTARY_ALIASES or k in T.UNSUPPORTED_ELEMENTARY
         if reserved and k not in MATIEC_IDENTIFIERS:
             self.error(pos, f"'{name}' is a reserved word and cannot name a {what}")
-        if SF.is_std_function(k) or k in SF.MISSING_IN_MATIEC_C:
+        if (SF.is_std_function(k) or k in SF.MISSING_IN_MATIEC_C) and not (what == "function" and k in SF.USER_NAMEABLE):
             self.error(pos, f"'{name}' is the name of a standard function and cannot name a {what}")
         if k in self.config_names and what != "configuration" and not self._std_mode:
             self.error(pos, f"'{name}' is the name of the CONFIGURATION and cannot name a {what} (MatIEC rejects "
@@ -1456,6 +1456,8 @@ class Checker:
         if v is not None:
             self.error(e.pos, f"'{e.name}' is a variable: a function block instance is called as a statement")
         pou = self.pous.get(k)
+        if pou is not None and pou.kind == "FUNCTION" and k in SF.USER_NAMEABLE:
+            pou = None      # MatIEC calls its standard function of that name, never the user's
         if pou is not None:
             if pou.kind != "FUNCTION":
                 self.error(e.pos, f"'{e.name}' is a {pou.kind}, not a FUNCTION")
