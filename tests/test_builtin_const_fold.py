@@ -77,6 +77,21 @@ def test_builtin_refuses_what_matiec_folding_refuses(decls, stmt, refused):
     assert first.line == 3
 
 
+@pytest.mark.parametrize("stmt", ["b := 2147483647 + 1 > 0;", "b := 2147483647 * 2 > 0;",
+                                  "b := -(2147483647 + 1) < 0;"])
+def test_untyped_comparisons_that_overflow_c_int_are_refused(stmt):
+    # iec2c builds these, but its C computes them as C int literals: `2147483647 + 1 > 2147483647` is FALSE
+    with pytest.raises(BuiltinCompileError) as info:
+        check_text(SOURCE.format(decls="b : BOOL;", stmt=stmt))
+    assert "overflows C's int" in info.value.diagnostics[0].message
+
+
+@pytest.mark.parametrize("stmt", ["b := 3000000000 > 0;", "b := 4294967295 + 1 > 4294967295;",
+                                  "b := 18446744073709551615 > 0;"])
+def test_untyped_comparisons_beyond_dint_take_a_wider_type(stmt):
+    check_text(SOURCE.format(decls="b : BOOL;", stmt=stmt))
+
+
 def test_the_first_overflowing_operation_is_named():
     with pytest.raises(BuiltinCompileError) as info:
         check_text(SOURCE.format(decls="i : INT;", stmt="i := 1 + 32767 * 2 - 32767 - 32767;"))

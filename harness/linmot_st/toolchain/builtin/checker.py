@@ -1348,9 +1348,9 @@ class Checker:
         t = self.unify(e.left, e.right, op, e.pos)
         if op in ("=", "<>", "<", ">", "<=", ">="):
             if isinstance(t, T.Pseudo):
-                self.settle(e.left, t.default)
-                self.settle(e.right, t.default)
-                t = t.default
+                t = self.comparison_type(t, e.left, e.right)
+                self.settle(e.left, t)
+                self.settle(e.right, t)
             tb = t.base()
             if isinstance(tb, T.Enum):
                 if op not in ("=", "<>"):
@@ -1390,6 +1390,27 @@ class Checker:
                 "-3.4028235E38..3.4028235E38"
             self.error(e.pos, f"constant expression overflows {T.describe(tb)}: '{e.op}' gives {shown} ({held}); "
                               "MatIEC's constant folding refuses it, also when a later operation brings it back")
+
+    def comparison_type(self, t: T.Pseudo, *sides: A.Node) -> T.Type:
+        """The type of untyped constants compared with each other. iec2c accepts them when some type holds
+        every value they fold to, and its C writes them as C literals: `3000000000 > 0` is compared as a
+        C long long (so here as LINT or ULINT when DINT is too small), but `2147483647 + 1` is a C int
+        addition that overflows (gcc wraps it: MatIEC's `2147483647 + 1 > 2147483647` is FALSE)."""
+        if t is not T.LIT_INT:
+            return t.default
+        for side in sides:
+            bad = self.folder.c_literal_overflow(side)
+            if bad is not None:
+                node, v = bad
+                self.error(node.pos, f"constant expression overflows C's int: '{node.op}' gives {v}; MatIEC builds "
+                                     "it but its C computes these untyped constants as C int literals, where "
+                                     "this overflows (undefined behaviour, in practice a wrapped value): write a "
+                                     "typed literal such as LINT#...")
+        found = [v for side in sides for _, v in self.folder.values(side)]
+        for cand in (t.default, T.LINT, T.ULINT):
+            if all(cand.lo <= v <= cand.hi for v in found):
+                return cand
+        return t.default
 
     @staticmethod
     def _is_zero(e: A.Node) -> bool:

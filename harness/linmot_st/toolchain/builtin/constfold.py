@@ -54,6 +54,44 @@ class Folder:
             return _apply(e.op, a, b)
         return None
 
+    def values(self, e: A.Node):
+        """(node, folded value) of the literals and checked operators in `e` (an explicit stack: chains are long)."""
+        stack = [e]
+        while stack:
+            node = stack.pop()
+            if isinstance(node, (A.Literal, A.BinOp)) and (isinstance(node, A.Literal) or node.op in CHECKED_OPS):
+                v = self.value(node)
+                if v is not None:
+                    yield node, v
+            if isinstance(node, A.BinOp):
+                stack += [node.left, node.right]
+            elif isinstance(node, A.UnOp):
+                stack.append(node.operand)
+
+    def c_literal_overflow(self, e: A.Node) -> tuple[A.BinOp, int] | None:
+        """The first operator of `e` (untyped integer constants) whose value does not fit the C type C gives
+        it when the constants are written as C literals, as MatIEC's C writes untyped constants compared with
+        each other: int up to 2147483647, else long long; an operator takes the wider of its operands."""
+        bits: dict[int, int] = {}
+        stack = [(e, False)]
+        while stack:
+            node, done = stack.pop()
+            if not done and isinstance(node, (A.BinOp, A.UnOp)):
+                kids = [node.left, node.right] if isinstance(node, A.BinOp) else [node.operand]
+                stack += [(node, True)] + [(k, False) for k in reversed(kids)]
+                continue
+            v = self.value(node)
+            if isinstance(node, A.BinOp):
+                width = max(bits[id(node.left)], bits[id(node.right)])
+                if isinstance(v, int) and node.op in CHECKED_OPS and not -2 ** (width - 1) <= v < 2 ** (width - 1):
+                    return node, v
+            elif isinstance(node, A.UnOp):
+                width = bits[id(node.operand)]
+            else:
+                width = 32 if isinstance(v, int) and -2 ** 31 <= v < 2 ** 31 else 64
+            bits[id(node)] = width
+        return None
+
     def overflow(self, e: A.BinOp, ty: T.Type) -> int | float | None:
         """The value of `e` when it is a constant that does not fit `ty` (its type), else None."""
         if e.op not in CHECKED_OPS:
