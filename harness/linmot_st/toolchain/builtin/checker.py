@@ -745,7 +745,7 @@ class Checker:
     def declare_program_instance(self, node: A.ProgramConfig, res: ResourceSym) -> ProgInst:
         k = self.check_identifier(node.name, node.pos, "program instance")
         if any(p.key == k for p in res.programs) or k in res.globals:
-            self.error(node.pos, f"duplicate name '{node.name}' in resource {res.name}")
+            self.error(node.pos, f"duplicate name '{node.name}' in {res.described}")
         if k in res.config.globals:
             self.error(node.pos, f"program instance '{node.name}' has the name of a global of the configuration "
                                  "(MatIEC rejects it)")
@@ -784,7 +784,7 @@ class Checker:
             g = self.resolve_global(res, ext.key)
             where = f" (used by {pou.name})"
             if g is None:
-                self.report(pos, f"VAR_EXTERNAL '{ext.name}' of {pou.name} has no VAR_GLOBAL in resource {res.name}")
+                self.report(pos, f"VAR_EXTERNAL '{ext.name}' of {pou.name} has no VAR_GLOBAL in {res.described}")
                 continue
             if T.ERROR in (g.ty, ext.ty):
                 continue
