@@ -17,7 +17,7 @@ import re
 from pathlib import Path
 
 from . import ast as A
-from . import matiec_c_macros, nesting, stdfb
+from . import constfold, matiec_c_macros, nesting, stdfb
 from . import stdfuncs as SF
 from . import types as T
 from .errors import BuiltinCompileError, Diagnostic
@@ -38,6 +38,14 @@ KEYWORDS = {
 }
 # parameters MatIEC accepts as identifiers although they look reserved
 NOT_RESERVED = {"Q", "IN", "PT", "PRIORITY", "INTERVAL", "SINGLE"}
+# words the builtin knows only to explain them (types and object-oriented constructs outside the subset)
+# that iec2c, with the build's flags (no -r), reads as ordinary identifiers: it builds them as the name of
+# a variable, field, POU, type, enumerated value, task, resource or instance (tests/test_builtin_matiec_names.py)
+MATIEC_IDENTIFIERS = {
+    "CHAR", "WCHAR", "LTIME", "LDATE", "LTOD", "LDT", "LTIME_OF_DAY", "LDATE_AND_TIME",
+    "METHOD", "END_METHOD", "INTERFACE", "END_INTERFACE", "EXTENDS", "IMPLEMENTS", "THIS", "SUPER",
+    "POINTER", "REFERENCE", "REF_TO",
+}
 # functions outside the subset that people reach for: a clear message instead of "unknown function"
 UNSUPPORTED_FUNCTIONS = {
     "SIZEOF": "SIZEOF", "ADR": "ADR", "REF": "REF()", "LOWER_BOUND": "LOWER_BOUND", "UPPER_BOUND": "UPPER_BOUND",
@@ -119,6 +127,7 @@ class Checker:
         self.for_vars: list[Var] = []       # control variables of the FOR loops around the statement
         self.anon = 0
         self._std_ast: dict[str, A.Pou] | None = None
+        self.folder = constfold.Folder()
         self._std_mode = False
         self.config_names: set[str] = set()
         self.externals_reported: set[Var] = set()   # VAR_EXTERNALs already reported as without a global
@@ -177,9 +186,10 @@ class Checker:
             self.error(pos, f"identifier '{name}' contains a double underscore, which MatIEC rejects")
         if k in NOT_RESERVED:
             return k
-        if k in KEYWORDS or k in T.ELEMENTARY or k in T.ELEMENTARY_ALIASES or k in T.UNSUPPORTED_ELEMENTARY:
+        reserved = k in KEYWORDS or k in T.ELEMENTARY or k in T.ELEMENTARY_ALIASES or k in T.UNSUPPORTED_ELEMENTARY
+        if reserved and k not in MATIEC_IDENTIFIERS:
             self.error(pos, f"'{name}' is a reserved word and cannot name a {what}")
-        if SF.is_std_function(k) or k in SF.MISSING_IN_MATIEC_C:
+        if (SF.is_std_function(k) or k in SF.MISSING_IN_MATIEC_C) and not (what == "function" and k in SF.USER_NAMEABLE):
             self.error(pos, f"'{name}' is the name of a standard function and cannot name a {what}")
         if k in stdfb.NON_STANDARD and what != "field" and not self._std_mode:
             self.error(pos, NON_STANDARD_NAME.format(name=name, what=_a(what)))
@@ -706,17 +716,17 @@ class Checker:
         for block in node.globals:
             self.declare_globals(block, cfg, cfg.globals)
         if not node.resources:
-            self.error(node.pos, "a CONFIGURATION needs at least one RESOURCE")
+            self.error(node.pos, "a CONFIGURATION needs at least one RESOURCE, or at least one PROGRAM instance")
         resource_names = {r.name.upper(): r for r in node.resources}
         for g in cfg.globals.values():
             if g.key in resource_names:
                 self.report(g.pos, f"global '{g.name}' has the name of resource {resource_names[g.key].name} "
                                    "(MatIEC rejects it)")
         for rnode in node.resources:
-            rk = self.check_identifier(rnode.name, rnode.pos, "resource")
+            rk = rnode.name.upper() if rnode.implicit else self.check_identifier(rnode.name, rnode.pos, "resource")
             if any(r.key == rk for r in cfg.resources):
                 self.error(rnode.pos, f"duplicate resource '{rnode.name}'")
-            res = ResourceSym(rnode.name, rk, rnode.pos, config=cfg)
+            res = ResourceSym(rnode.name, rk, rnode.pos, config=cfg, implicit=rnode.implicit)
             for block in rnode.globals:
                 self.declare_globals(block, res, res.globals)
             for g in res.globals.values():
@@ -784,7 +794,7 @@ class Checker:
     def declare_program_instance(self, node: A.ProgramConfig, res: ResourceSym) -> ProgInst:
         k = self.check_identifier(node.name, node.pos, "program instance")
         if any(p.key == k for p in res.programs) or k in res.globals:
-            self.error(node.pos, f"duplicate name '{node.name}' in resource {res.name}")
+            self.error(node.pos, f"duplicate name '{node.name}' in {res.described}")
         if k in res.config.globals:
             self.error(node.pos, f"program instance '{node.name}' has the name of a global of the configuration "
                                  "(MatIEC rejects it)")
@@ -827,7 +837,7 @@ class Checker:
             g = self.resolve_global(res, ext.key)
             where = f" (used by {pou.name})"
             if g is None:
-                self.report(pos, f"VAR_EXTERNAL '{ext.name}' of {pou.name} has no VAR_GLOBAL in resource {res.name}")
+                self.report(pos, f"VAR_EXTERNAL '{ext.name}' of {pou.name} has no VAR_GLOBAL in {res.described}")
                 self.externals_reported.add(ext)
                 continue
             if T.ERROR in (g.ty, ext.ty):
@@ -1153,6 +1163,7 @@ class Checker:
     def settle(self, e: A.Node, t: T.Type) -> None:
         """Give a pseudo-typed expression (untyped literals, result-overloaded calls) the type t."""
         rights: list[tuple[A.Node, T.Type]] = []
+        chain: list[A.BinOp] = []
         # down a left-associative operator chain iteratively; the right operands are settled after the
         # innermost left one, the order of a recursive walk
         while isinstance(e, A.BinOp) and isinstance(e.ty, T.Pseudo):
@@ -1167,12 +1178,15 @@ class Checker:
             if op in ("AND", "OR", "XOR") and not T.is_bit(tb):
                 self.error(e.pos, f"{op} needs bit strings (BOOL, BYTE, WORD...), not {T.describe(t)}")
             e.ty = tb
+            chain.append(e)
             if op != "**":
                 rights.append((e.right, tb))
             e, t = e.left, tb
         self.settle_one(e, t)
         for right, tb in reversed(rights):
             self.settle(right, tb)
+        for b in reversed(chain):
+            self.check_constant(b, b.ty)
 
     def settle_one(self, e: A.Node, t: T.Type) -> None:
         p = e.ty
@@ -1422,9 +1436,9 @@ class Checker:
         t = self.unify(e.left, e.right, op, e.pos)
         if op in ("=", "<>", "<", ">", "<=", ">="):
             if isinstance(t, T.Pseudo):
-                self.settle(e.left, t.default)
-                self.settle(e.right, t.default)
-                t = t.default
+                t = self.comparison_type(t, e.left, e.right)
+                self.settle(e.left, t)
+                self.settle(e.right, t)
             tb = t.base()
             if isinstance(tb, T.Enum):
                 if op not in ("=", "<>"):
@@ -1451,7 +1465,40 @@ class Checker:
         elif op in ("AND", "OR", "XOR"):
             if not T.is_bit(tb):
                 self.error(e.pos, f"{op} needs bit strings (BOOL, BYTE, WORD, DWORD, LWORD), not {T.describe(t)}")
+        self.check_constant(e, tb)
         return tb
+
+    def check_constant(self, e: A.BinOp, tb: T.Type) -> None:
+        """Refuse a constant operation whose value does not fit its type, as MatIEC's constant folding does
+        (constfold.py), intermediate results included."""
+        v = self.folder.overflow(e, tb)
+        if v is not None:
+            shown = f"{v:g}" if isinstance(v, float) else str(v)
+            held = f"{tb.lo}..{tb.hi}" if T.is_int(tb) else "finite values" if tb is T.LREAL else \
+                "-3.4028235E38..3.4028235E38"
+            self.error(e.pos, f"constant expression overflows {T.describe(tb)}: '{e.op}' gives {shown} ({held}); "
+                              "MatIEC's constant folding refuses it, also when a later operation brings it back")
+
+    def comparison_type(self, t: T.Pseudo, *sides: A.Node) -> T.Type:
+        """The type of untyped constants compared with each other. iec2c accepts them when some type holds
+        every value they fold to, and its C writes them as C literals: `3000000000 > 0` is compared as a
+        C long long (so here as LINT or ULINT when DINT is too small), but `2147483647 + 1` is a C int
+        addition that overflows (gcc wraps it: MatIEC's `2147483647 + 1 > 2147483647` is FALSE)."""
+        if t is not T.LIT_INT:
+            return t.default
+        for side in sides:
+            bad = self.folder.c_literal_overflow(side)
+            if bad is not None:
+                node, v = bad
+                self.error(node.pos, f"constant expression overflows C's int: '{node.op}' gives {v}; MatIEC builds "
+                                     "it but its C computes these untyped constants as C int literals, where "
+                                     "this overflows (undefined behaviour, in practice a wrapped value): write a "
+                                     "typed literal such as LINT#...")
+        found = [v for side in sides for _, v in self.folder.values(side)]
+        for cand in (t.default, T.LINT, T.ULINT):
+            if all(cand.lo <= v <= cand.hi for v in found):
+                return cand
+        return t.default
 
     @staticmethod
     def _is_zero(e: A.Node) -> bool:
@@ -1518,6 +1565,8 @@ class Checker:
         if v is not None:
             self.error(e.pos, f"'{e.name}' is a variable: a function block instance is called as a statement")
         pou = self.pous.get(k)
+        if pou is not None and pou.kind == "FUNCTION" and k in SF.USER_NAMEABLE:
+            pou = None      # MatIEC calls its standard function of that name, never the user's
         if pou is not None:
             if pou.kind != "FUNCTION":
                 self.error(e.pos, f"'{e.name}' is a {pou.kind}, not a FUNCTION")

@@ -28,6 +28,7 @@ def is_c_pragma(text: str) -> bool:
 
 
 GRAMMAR = Path(__file__).with_name("st.lark")
+IMPLICIT_RESOURCE = "RESOURCE"    # the name of the resource of a CONFIGURATION written without one
 
 # words that MatIEC does not know, or knows only outside this subset: a syntax error at one of them
 # gets a message that says so rather than "unexpected token"
@@ -205,6 +206,13 @@ class _Builder(lark.Transformer):
                           [x for x in rest if isinstance(x, A.VarBlock)],
                           [x for x in rest if isinstance(x, A.TaskDecl)],
                           [x for x in rest if isinstance(x, A.ProgramConfig)])
+
+    def single_resource(self, items):
+        # MatIEC names this resource RESOURCE in its C (RESOURCE__INST) and leaves it out of the
+        # variables' paths (CONFIG.INST.VAR)
+        return A.Resource(items[0].pos, IMPLICIT_RESOURCE, "", [],
+                          [x for x in items if isinstance(x, A.TaskDecl)],
+                          [x for x in items if isinstance(x, A.ProgramConfig)], implicit=True)
 
     def task(self, items):
         name, *params = items
