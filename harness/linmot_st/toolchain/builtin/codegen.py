@@ -854,10 +854,8 @@ class CodeGen:
             return f"({a} {op} {b})"
         rt = e.right.ty.base()
         k = f"(double)({b})"
-        if op == "*":
-            if T.is_int(rt):
-                return f"((__ns_t)((unsigned long long){a} * (unsigned long long)(long long)({b})))"
-            return f"__time_mul({a}, {k})"
+        if op == "*":       # by an integer too: MatIEC's C multiplies in double (__time_mul) either way
+            return f"__time_mul({a}, {k}, {self.site(e.pos).args()})"
         return f"__time_div({a}, {k}, {self.site(e.pos).args()})"
 
     # ------------------------------------------------------------------ calls
@@ -1132,7 +1130,7 @@ class CodeGen:
             return f"(({dst.cname})(({a}) / 1000000000LL))"
         if d in ("time", "date", "tod", "dt"):
             if s == "real":
-                return f"__r2time((double)({a}))"
+                return f"__r2time((double)({a}), {self.site(e.pos).args()})"
             if s == "uint" or s == "bit":
                 return f"((__ns_t)((unsigned long long)({a}) * 1000000000ULL))"
             return f"((__ns_t)((unsigned long long)(long long)({a}) * 1000000000ULL))"
