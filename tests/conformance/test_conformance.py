@@ -26,13 +26,13 @@ REJECT = [c for c in CASES if c.kind == "reject"]
 FAULT = [c for c in CASES if c.kind == "fault"]
 
 HAVE_MATIEC = matiec_available()
-FOR_VARIANT = probe().name if HAVE_MATIEC else None
+WORK = Path(tempfile.gettempdir()) / "linmot-st-conformance"
+FOR_VARIANT = probe(WORK / "for-probe").name if HAVE_MATIEC else None
 SPIN_WATCHDOG_NS = 200_000_000      # a case expected to spin under this iec2c: the watchdog ends it
 BACKENDS = [
     pytest.param("builtin"),
     pytest.param("matiec", marks=[pytest.mark.matiec, pytest.mark.skipif(not HAVE_MATIEC, reason=MATIEC_MISSING)]),
 ]
-WORK = Path(tempfile.gettempdir()) / "linmot-st-conformance"
 DIAGNOSTIC = re.compile(r"^(?P<file>[^:]+):(?P<line>\d+):(?P<col>\d+): error: (?P<msg>.+)$")
 
 

@@ -265,7 +265,9 @@ __attribute__((visibility("default"))) unsigned long long plc_watchdog_ns(void) 
 /* UBSan's entry points for the checks compiled into iec2c's C (toolchain/cc.py check_flags, with
  * -fno-sanitize-recover: the _abort variants). Each ends the scan as a PLC fault of its own kind located
  * at its caller: the loader finds the POU and the ST line in the library's line table (iec2c -O l), since
- * the check itself sits in MatIEC's headers. The data they get (source location, types) is not used. */
+ * the check itself sits in MatIEC's headers. The data they get (source location, types) is not used.
+ * Hidden: bound inside this library at link time, so neither another PLC library nor a libubsan loaded
+ * into the process can take the calls. */
 static void ubsan_fault(int kind, void *ret) __attribute__((noreturn));
 static void ubsan_fault(int kind, void *ret)
 {
@@ -276,20 +278,20 @@ static void ubsan_fault(int kind, void *ret)
     siglongjmp(scan_jmp, 1);
 }
 
-__attribute__((visibility("default"), noreturn)) void __ubsan_handle_out_of_bounds_abort(void *data, void *index)
+__attribute__((visibility("hidden"), noreturn)) void __ubsan_handle_out_of_bounds_abort(void *data, void *index)
 {
     (void)data; (void)index;
     ubsan_fault(2, __builtin_return_address(0));
 }
 
-__attribute__((visibility("default"), noreturn))
+__attribute__((visibility("hidden"), noreturn))
 void __ubsan_handle_shift_out_of_bounds_abort(void *data, void *lhs, void *rhs)
 {
     (void)data; (void)lhs; (void)rhs;
     ubsan_fault(6, __builtin_return_address(0));
 }
 
-__attribute__((visibility("default"), noreturn)) void __ubsan_handle_float_cast_overflow_abort(void *data, void *from)
+__attribute__((visibility("hidden"), noreturn)) void __ubsan_handle_float_cast_overflow_abort(void *data, void *from)
 {
     (void)data; (void)from;
     ubsan_fault(7, __builtin_return_address(0));
