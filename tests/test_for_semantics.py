@@ -71,6 +71,7 @@ def test_fixed_has_no_warnings(tmp_path):
 
 @requires_matiec
 def test_probe_agrees_with_a_run_and_is_cached(tmp_path, monkeypatch):
+    monkeypatch.setattr(for_semantics, "_memo", {})      # measured here, not remembered from another test
     sem = for_semantics.probe(tmp_path)
     assert sem.name in ("head", "openplc", "fixed", "other")
     prog = write_st("""
@@ -86,6 +87,7 @@ def test_probe_agrees_with_a_run_and_is_cached(tmp_path, monkeypatch):
     plc.step(1)
     assert (plc["MAIN.N"] == 1) == sem.once and (plc["MAIN.I"] == 6) == sem.past_end
     # a new process reads the record beside the cache: nothing is built or run again
+    assert list((tmp_path / "for-probe").glob("*.json"))
     monkeypatch.setattr(for_semantics, "_memo", {})
     monkeypatch.setattr(for_semantics, "_measure", lambda *a: pytest.fail("measured again"))
     assert for_semantics.probe(tmp_path) == sem
