@@ -184,6 +184,11 @@ def _compile(chosen: str, tool, src: _sources.Sources, store: _cache.Cache, key:
             if not trap_flags_supported():
                 manifest.setdefault("warnings", []).append(
                     "array indices are not checked: the C compiler has no trapping bounds sanitizer")
+            elif not cc.checks_undefined_values():
+                manifest.setdefault("warnings", []).append(
+                    "shift counts and REAL -> integer conversions are not checked: the C compiler has no "
+                    "UBSan shift-exponent/float-cast-overflow checks; where MatIEC's C leaves them undefined "
+                    "the values are the C compiler's")
         else:
             manifest, all_units, read = _builtin_generate(src, c_dir)
             unit_flags, include_dirs = {}, [c_dir]
@@ -261,14 +266,15 @@ def _explain_matiec_c_errors(diags: list[str]) -> list[str]:
 
 
 def _matiec_unit_flags() -> list[str]:
-    """Flags of the units iec2c wrote: an index out of range traps (the glue reports kind 2); and since
+    """Flags of the units iec2c wrote: an index out of range, a shift count out of range and an undefined
+    float -> integer conversion stop the scan (the glue reports kinds 2, 6 and 7); and since
     MatIEC sometimes calls a helper it never declares (nor defines), an implicit `int` declaration, which
     would compile into wrong code, is an error at the ST line."""
-    return cc.bounds_trap_flags() + ["-Werror=implicit-function-declaration"]
+    return cc.check_flags() + ["-Werror=implicit-function-declaration"]
 
 
 def trap_flags_supported() -> bool:
-    return bool(cc.bounds_trap_flags())
+    return bool(cc.check_flags())
 
 
 def _builtin_generate(src: _sources.Sources, c_dir: Path) -> tuple[dict, list[Path], list[Path]]:

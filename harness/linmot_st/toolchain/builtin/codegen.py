@@ -864,10 +864,8 @@ class CodeGen:
             return f"({a} {op} {b})"
         rt = e.right.ty.base()
         k = f"(double)({b})"
-        if op == "*":
-            if T.is_int(rt):
-                return f"((__ns_t)((unsigned long long){a} * (unsigned long long)(long long)({b})))"
-            return f"__time_mul({a}, {k})"
+        if op == "*":       # by an integer too: MatIEC's C multiplies in double (__time_mul) either way
+            return f"__time_mul({a}, {k}, {self.site(e.pos).args()})"
         return f"__time_div({a}, {k}, {self.site(e.pos).args()})"
 
     # ------------------------------------------------------------------ calls
@@ -998,7 +996,7 @@ class CodeGen:
         if n == "MOVE":
             return cs[0]
         if n == "TRUNC":
-            return f"(({t.cname})__trunc_i((double)({cs[0]})))"
+            return self.trunc(t, cs[0], e.pos)
         if n in ("AND", "OR", "XOR"):
             op = {"AND": "AND", "OR": "OR", "XOR": "XOR"}[n]
             acc = cs[0]
@@ -1011,7 +1009,7 @@ class CodeGen:
         if n == "NOT":
             return f"(!{cs[0]})" if t is T.BOOL else f"(({t.cname})~{cs[0]})"
         if n in ("SHL", "SHR", "ROL", "ROR"):
-            return f"__{n.lower()}_{t.cname}({cs[0]}, (long long)({cs[1]}))"
+            return f"__{n.lower()}_{t.cname}({cs[0]}, (long long)({cs[1]}), {self.site(e.pos).args()})"
         if n == "SEL":
             return f"({cs[0]} ? {cs[2]} : {cs[1]})"
         if n in ("MAX", "MIN"):
@@ -1089,6 +1087,15 @@ class CodeGen:
             parts.append(f"if ({self.cmp_expr(op, acc, x, t)}) {acc} = {x}")
         return "({ " + "; ".join(parts) + f"; {acc}; }})"
 
+    def trunc(self, t: T.Type, a: str, pos: A.Pos) -> str:
+        """TRUNC to t: faults where MatIEC's direct C cast is undefined (the value does not fit t)."""
+        site = self.site(pos).args()
+        if t.kind == "uint":
+            return f"(({t.cname})__trunc_u((double)({a}), {float(2 ** t.bits)!r}, {site}))"
+        # the double just below -2^(bits-1), which -2^(bits-1) - 1 rounds to for 64 bits
+        lo = -(2.0 ** (t.bits - 1)) - (1.0 if t.bits < 64 else 2048.0)
+        return f"(({t.cname})__trunc_s((double)({a}), {lo!r}, {float(2 ** (t.bits - 1))!r}, {site}))"
+
     def conversion(self, sc: SF.StdCall, arg: A.Node, e: A.Call) -> str:
         src, dst = sc.conv
         if dst is None:
@@ -1133,14 +1140,14 @@ class CodeGen:
             return f"(({dst.cname})(({a}) / 1000000000LL))"
         if d in ("time", "date", "tod", "dt"):
             if s == "real":
-                return f"__r2time((double)({a}))"
+                return f"__r2time((double)({a}), {self.site(e.pos).args()})"
             if s == "uint" or s == "bit":
                 return f"((__ns_t)((unsigned long long)({a}) * 1000000000ULL))"
             return f"((__ns_t)((unsigned long long)(long long)({a}) * 1000000000ULL))"
         if s == "real" and d in ("sint",):
-            return f"(({dst.cname})__r2i((double)({a})))"
+            return f"(({dst.cname})__r2i((double)({a}), {self.site(e.pos).args()}))"
         if s == "real" and d in ("uint", "bit"):
-            return f"(({dst.cname})__r2u((double)({a})))"
+            return f"(({dst.cname})__r2u((double)({a}), {self.site(e.pos).args()}))"
         return f"(({dst.cname})({a}))"
 
     # ------------------------------------------------------------------ configuration
