@@ -1717,7 +1717,10 @@ class Checker:
             nt = self.concrete(args[1])
             if not T.is_int(nt):
                 self.error(args[1].pos, f"N of {name} must be an integer, not {T.describe(nt)}")
-            return self.tvar(e, sc, [args[0]], lk.fixed, T.is_bit, "a bit string (BOOL, BYTE, WORD, DWORD, LWORD)", name)
+            # no BOOL: iec2c accepts SHL(b, 1) but calls SHL__BOOL__BOOL__SINT, which its headers do not define
+            return self.tvar(e, sc, [args[0]], lk.fixed, _shiftable,
+                             "BYTE, WORD, DWORD or LWORD (a BOOL builds with iec2c, but MatIEC's C defines no "
+                             "shift or rotate of a BOOL and does not compile)", name)
         if n == "SEL":
             self.coerce(args[0], T.BOOL, f"G of {name}")
             return self.tvar(e, sc, args[1:], lk.fixed, _selectable, "an elementary value", name)
@@ -1869,6 +1872,10 @@ def _has_index(e: A.Node) -> bool:
             return True
         e = e.base
     return False
+
+
+def _shiftable(t) -> bool:
+    return T.is_bit(t) and not T.same(t, T.BOOL)
 
 
 def _selectable(t: T.Type) -> bool:
