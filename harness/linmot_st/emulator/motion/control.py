@@ -12,6 +12,8 @@ Every behaviour that no source states is marked INFERRED here and listed in docs
 
 from __future__ import annotations
 
+from bisect import bisect_right
+from operator import itemgetter
 from typing import Callable
 
 from . import commands as C
@@ -638,7 +640,11 @@ class MotionControl:
 
     def _quiet_run(self, t_limit: int, entries: list | None = None) -> bool:
         """Commit quiet cycles from the next tick up to t_limit; True when any ran. It stops before the first
-        cycle that is not quiet: the generic cycle runs that one. `entries` collects each cycle's state."""
+        cycle that is not quiet: the generic cycle runs that one. `entries` collects each cycle's state.
+
+        The hottest loop of the model: the demand comes from the plan's `demands` walk, Axis.follow's
+        arithmetic is inlined term for term (so every value is bit-identical to the generic cycle's; the
+        equivalence tests compare them exactly), the state lives in locals and is written back once."""
         gen, axis, par = self.gen, self.axis, self.par
         cyc, t = self.s.cycle_ns, self._next_tick
         lag_warn, lag_err = par(P_LAG_ALWAYS_WARN, 1 << 31), par(P_LAG_ALWAYS_ERROR, 1 << 31)
@@ -647,37 +653,63 @@ class MotionControl:
         lim_neg, lim_pos = par(P_LIMIT_NEGATIVE, -(1 << 31)), par(P_LIMIT_POSITIVE, 1 << 31)
         target_ok = self.state >= W.OPERATION_ENABLED
         window, hold = self.s.in_target_window_pu, self.s.in_target_hold_ns
+        gen_end, gen_target = gen.end_ns, gen.target
         was_active = not gen.done(self._now)
         warn_bits, in_target, since, prev_vd = self.warn_bits, self.in_target, self._in_window_since, self._prev_vd
         sw, sv = self.words[0], self.words[1]
-        record = self.trajectory.add if self.s.record_trajectory else None
+        record = self.s.record_trajectory
+        samples: list[Sample] = []
+        new_sample = tuple.__new__          # Sample(...) without its Python-level __new__
+        # Axis.follow, inlined (its constants, then its state in locals)
+        h, offset = axis.h, axis.offset
+        p00, p01, p10, p11 = axis._phi
+        g0, g1 = axis._gam
+        one_kff = 1.0 - axis._kff
+        stop_neg, stop_pos = axis.s.stop_negative_pu, axis.s.stop_positive_pu
+        settle = axis.s.settle_pu
+        physical, velocity, acceleration = axis.physical, axis.velocity, axis.acceleration
+        p = v = 0.0
         ran = 0
-        while t <= t_limit:
-            saved = (axis.physical, axis.velocity, axis.acceleration)
-            p, v, _ = gen.at(t)
-            axis.follow(p, prev_vd, v)
-            pos = axis.position
-            err = abs(p - pos)
-            active = not gen.done(t)
+        for p1, v1 in gen.demands(t, cyc):
+            if t > t_limit:
+                break
+            e = p1 - (v1 - prev_vd) * h / 2 - prev_vd * h - (physical + offset)
+            ed = prev_vd - velocity
+            u = one_kff * (v1 - prev_vd) / h
+            ph1 = p1 - (p00 * e + p01 * ed + g0 * u) - offset
+            if stop_neg <= ph1 <= stop_pos:
+                va1 = v1 - (p10 * e + p11 * ed + g1 * u)
+                ac1 = (va1 - velocity) / h
+            else:                                   # on a mechanical stop: Axis.follow's own path
+                axis.physical, axis.velocity, axis.acceleration = physical, velocity, acceleration
+                axis.follow(p1, prev_vd, v1)
+                ph1, va1, ac1 = axis.physical, axis.velocity, axis.acceleration
+            pos = ph1 + offset
+            err = abs(p1 - pos)
+            active = t < gen_end
             warn = (W.WARN_POS_LAG_ALWAYS if err > lag_warn else 0) | \
                    (W.WARN_POS_LAG_STANDING if not active and err > st_warn else 0)
-            in_window = target_ok and not active and abs(gen.target - pos) <= window
+            in_window = target_ok and not active and abs(gen_target - pos) <= window
             new_since = (t if since is None else since) if in_window else None
             now_in_target = in_window and t - new_since >= hold
             if (active != was_active or warn != warn_bits or err > lag_err or (not active and err > st_err)
                     or (limits and (pos < lim_neg or pos > lim_pos)) or now_in_target != in_target
-                    or (not active and not (new_since is not None and not now_in_target) and axis.at_rest(p))):
-                axis.physical, axis.velocity, axis.acceleration = saved
+                    or (not active and not (new_since is not None and not now_in_target)
+                        and abs(p1 - pos) < settle and abs(va1) * 1e-3 < settle)):   # Axis.at_rest
                 break
-            prev_vd, since = v, new_since
-            self.dem_p, self.dem_v, self._last_tick, self._now = p, v, t, t
-            sample = Sample(t, p, pos, v, axis.velocity, sv, sw) if record is not None else None
+            physical, velocity, acceleration = ph1, va1, ac1
+            p, v, prev_vd, since = p1, v1, v1, new_since
+            sample = new_sample(Sample, (t, p1, pos, v1, va1, sv, sw)) if record else None
             if entries is not None:
-                entries.append((t, axis.physical, axis.velocity, axis.acceleration, v, p, v, since, sample))
-            elif sample is not None:
-                record(sample)
+                entries.append((t, ph1, va1, ac1, v1, p1, v1, since, sample))
+            elif record:
+                samples.append(sample)
             ran += 1
             t += cyc
+        axis.physical, axis.velocity, axis.acceleration = physical, velocity, acceleration
+        self.trajectory.extend(samples)
+        if ran:
+            self.dem_p, self.dem_v, self._last_tick, self._now = p, v, t - cyc, t - cyc
         self._prev_vd, self._in_window_since, self._next_tick = prev_vd, since, t
         return ran > 0
 
@@ -699,13 +731,11 @@ class MotionControl:
 
     def _apply_ahead(self, t: int) -> None:
         """Take over the cycles computed ahead up to t."""
-        ahead, k = self._ahead, 0
-        add = self.trajectory.add
-        while k < len(ahead) and ahead[k][0] <= t:
-            if ahead[k][8] is not None:
-                add(ahead[k][8])
-            k += 1
+        ahead = self._ahead
+        k = bisect_right(ahead, t, key=itemgetter(0))
         if k:
+            if ahead[0][8] is not None:
+                self.trajectory.extend([e[8] for e in ahead[:k]])
             (tk, self.axis.physical, self.axis.velocity, self.axis.acceleration, self._prev_vd, self.dem_p,
              self.dem_v, self._in_window_since, _) = ahead[k - 1]
             self._last_tick, self._next_tick, self._now = tk, tk + self.s.cycle_ns, tk

@@ -3,7 +3,8 @@
 A generator is planned once, when its command starts, and evaluated at any time after that: `at(t_ns)` gives
 the demand position (pu), velocity (pu/s) and acceleration (pu/s^2). Plans are exact (piecewise constant
 acceleration, or linear between curve setpoints); the MC samples them once per cycle, so a motion ends within
-one cycle of its planned end.
+one cycle of its planned end. `demands(t_ns, step_ns)` yields the same (position, velocity) as `at` at t_ns,
+t_ns + step_ns, ... without a call per sample (the quiet MC cycles take their demand from it).
 """
 
 from __future__ import annotations
@@ -56,6 +57,29 @@ class VaPlan:
 
     def done(self, t_ns: int) -> bool:
         return t_ns >= self.end_ns
+
+    def demands(self, t_ns: int, step_ns: int):
+        """(position, velocity) at t_ns, t_ns + step_ns, ...: `at`'s arithmetic, term for term (so the values
+        are bit-identical), with the segment found by walking forward as time only grows."""
+        origin, end_s, segs = self.origin_ns, self.end_s, self._segs
+        last = len(segs) - 1
+        i = 0
+        while True:
+            t = (t_ns - origin) * NS
+            if t >= end_s or not segs:
+                break
+            if t <= 0:
+                yield self._start
+            else:
+                while i < last and segs[i + 1].t <= t:
+                    i += 1
+                s = segs[i]
+                dt = t - s.t
+                yield s.p + s.v * dt + 0.5 * s.a * dt * dt, s.v + s.a * dt
+            t_ns += step_ns
+        rest = (self.target, 0.0)
+        while True:
+            yield rest
 
 
 def _plan(segs: list[_Seg], t: float, p: float, v: float, target: float, vmax: float, acc: float,
@@ -143,6 +167,9 @@ class CurvePlan:
     def done(self, t_ns: int) -> bool:
         return t_ns >= self.end_ns
 
+    def demands(self, t_ns: int, step_ns: int):
+        return _demands_by_at(self, t_ns, step_ns)
+
 
 class Hold:
     """No setpoint generation: the demand rests at a position."""
@@ -158,3 +185,16 @@ class Hold:
 
     def done(self, t_ns: int) -> bool:
         return True
+
+    def demands(self, t_ns: int, step_ns: int):
+        rest = (self.target, 0.0)
+        while True:
+            yield rest
+
+
+def _demands_by_at(plan, t_ns: int, step_ns: int):
+    """`demands` through `at`, for a plan without a faster walk."""
+    while True:
+        p, v, _ = plan.at(t_ns)
+        yield p, v
+        t_ns += step_ns
