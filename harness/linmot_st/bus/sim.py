@@ -106,7 +106,8 @@ class SimBus:
         self._tx: list | None = None     # in flight: [part, frame, start, end, status, retransmit]
         self._idle_at = 0                # the bus is free for arbitration from this time on
         self._actions: list[tuple[int, int, Callable[[int], Any]]] = []
-        self._length_cache: dict[Frame, int] = {}
+        # frame length by (id, data, rtr, rtr_dlc): a tuple hashes in C, a Frame through its dataclass __hash__
+        self._length_cache: dict[tuple, int] = {}
         self._stage: dict[str, list[Fault]] = {"queued": [], "start": [], "end": []}
 
     # -- participants -----------------------------------------------------------------------
@@ -295,7 +296,7 @@ class SimBus:
         for p in parts:
             if p.has_timer:
                 t = p.node.next_timer_ns()
-                p.timer = None if t is None else (t if t > now else now)
+                p.timer = None if t is None else (int(t) if t > now else now)
         while True:
             tx = self._tx
             # the earliest event; ties go to the first kind checked
@@ -346,11 +347,13 @@ class SimBus:
 
     def _arbitrate(self, t: int) -> None:
         while True:
-            winner = None
+            winner, best = None, 0x800
             for p in self._parts:
                 q = p.queue
-                if q and q[0][0] <= t and (winner is None or q[0][2].can_id < winner.queue[0][2].can_id):
-                    winner = p
+                if q:
+                    head = q[0]
+                    if head[0] <= t and head[2].can_id < best:
+                        winner, best = p, head[2].can_id
             if winner is None:
                 return
             frame = winner.queue.pop(0)[2]
@@ -362,11 +365,12 @@ class SimBus:
                     break
             if status == "drop":
                 continue   # lost before the bus: the next candidate arbitrates at the same instant
-            bits = self._length_cache.get(frame)
+            key = (frame.can_id, frame.data, frame.rtr, frame.rtr_dlc)
+            bits = self._length_cache.get(key)
             if bits is None:
                 if len(self._length_cache) > 100_000:
                     self._length_cache.clear()
-                bits = self._length_cache[frame] = frame_length_bits(frame)
+                bits = self._length_cache[key] = frame_length_bits(frame)
             if status == "corrupt":
                 # the receivers' CRC check fails; their error flag starts after the ACK delimiter
                 bits = bits - 7 + ERROR_FRAME_BITS
@@ -403,12 +407,15 @@ class SimBus:
                     frame = fault.mutate(frame)
                     status = "mutated"
         self.trace.append(TraceEntry(start, end, part.name, frame, status))
+        now = self.now
         for p in self._parts:
             if p is not part:
-                out = p.node.on_frame(frame, end)
+                node = p.node
+                out = node.on_frame(frame, end)
                 if out:
                     self._queue_all(p, end, out)
-                self._read_timer(p)
+                t = node.next_timer_ns()          # _read_timer, inlined: once per receiver and frame
+                p.timer = None if t is None else (int(t) if t > now else now)
         if duplicate and self._parts_by_name.get(part.name) is part:
             self._requeue_first(part, end, sent)
 

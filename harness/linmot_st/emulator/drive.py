@@ -180,12 +180,17 @@ class E1100Drive:
         self._at(at_ns, fire)
 
     def next_timer_ns(self) -> int | None:
-        while self._events and not self._live(self._events[0]):
-            heapq.heappop(self._events)
-        t = self._events[0].t if self._events else None
-        for other in (self.mc.next_timer_ns(self.pdo.cycle_sensitive), self.pdo.next_timer_ns()):
-            if other is not None and (t is None or other < t):
-                t = other
+        events = self._events              # the bus asks after every frame: kept free of allocations
+        while events and not self._live(events[0]):
+            heapq.heappop(events)
+        t = events[0].t if events else None
+        pdo = self.pdo
+        other = self.mc.next_timer_ns(pdo.cycle_sensitive)
+        if other is not None and (t is None or other < t):
+            t = other
+        other = pdo.next_timer_ns()
+        if other is not None and (t is None or other < t):
+            t = other
         return t
 
     def receive_ids(self) -> list[int]:
@@ -263,8 +268,11 @@ class E1100Drive:
         self._out.append((t, Frame(can_id, data)))
 
     def _take(self, t_ns: int) -> list:
-        out, self._out = self._out, []
-        return [(max(t, t_ns), f) for t, f in out]
+        out = self._out
+        if not out:
+            return []
+        self._out = []
+        return [(t if t > t_ns else t_ns, f) for t, f in out]
 
     def _operating_ms(self, t_ns: int) -> int:
         return self.profile.identity.operating_hours * 3_600_000 + t_ns // MS

@@ -23,6 +23,7 @@ MS = 1_000_000
 S = 1_000_000_000
 SYNC_NS = 4 * MS
 MOVE_NS = 300 * MS
+SYNC = Frame(0x080, b"")
 
 
 class MotionMaster:
@@ -45,17 +46,18 @@ class MotionMaster:
         return ()
 
     def next_timer_ns(self):
-        times = [self.next_sync, self.next_move]
-        if self.script:
-            times.append(self.script[0][0])
-        return min(times)
+        # called after every frame on the bus: no list built (a PLC's cost is part of the figure too)
+        t = self.next_sync if self.next_sync < self.next_move else self.next_move
+        if self.script and self.script[0][0] < t:
+            t = self.script[0][0]
+        return t
 
     def on_timer(self, t_ns):
         out = []
         while self.script and self.script[0][0] <= t_ns:
             out.append((t_ns, self.script.pop(0)[1]))
         if self.next_sync <= t_ns:
-            out.append((t_ns, Frame(0x080, b"")))
+            out.append((t_ns, SYNC))
             self.next_sync += SYNC_NS
         if self.next_move <= t_ns:
             self.count = self.count % 15 + 1

@@ -12,6 +12,7 @@ Every behaviour that no source states is marked INFERRED here and listed in docs
 
 from __future__ import annotations
 
+import math
 from bisect import bisect_right
 from operator import itemgetter
 from typing import Callable
@@ -573,7 +574,7 @@ class MotionControl:
         after the quiet ones computed ahead."""
         t = self._next_tick
         if t is not None and not cycle_sensitive:
-            ahead = self.compute_ahead()
+            ahead = self._ahead[-1][0] + self.s.cycle_ns if self._ahead else self.compute_ahead()
             if ahead is not None:
                 t = ahead
         if self._hw_test_end is not None and (t is None or self._hw_test_end < t):
@@ -653,9 +654,21 @@ class MotionControl:
         lim_neg, lim_pos = par(P_LIMIT_NEGATIVE, -(1 << 31)), par(P_LIMIT_POSITIVE, 1 << 31)
         target_ok = self.state >= W.OPERATION_ENABLED
         window, hold = self.s.in_target_window_pu, self.s.in_target_hold_ns
-        gen_end, gen_target = gen.end_ns, gen.target
-        was_active = not gen.done(self._now)
+        gen_target = gen.target
+        # `active` (the setpoint generation runs) is the same in every quiet cycle of a run: the first cycle
+        # where it changes is not quiet. So a run while active ends before the plan's end at the latest.
+        active = not gen.done(self._now)
+        if active:
+            t_limit = min(t_limit, gen.end_ns - 1)
         warn_bits, in_target, since, prev_vd = self.warn_bits, self.in_target, self._in_window_since, self._prev_vd
+        if not limits:
+            lim_neg, lim_pos = -math.inf, math.inf
+        # while active: the warn word has no standing bit, the axis is never in the target window
+        if active and (in_target or warn_bits & ~W.WARN_POS_LAG_ALWAYS):
+            return False
+        # while active, a cycle is quiet when lag_lo < err <= lag_hi (the always-warn bit and error unchanged)
+        lag_lo = lag_warn if warn_bits & W.WARN_POS_LAG_ALWAYS else -1.0
+        lag_hi = lag_err if warn_bits & W.WARN_POS_LAG_ALWAYS else min(lag_warn, lag_err)
         sw, sv = self.words[0], self.words[1]
         record = self.s.record_trajectory
         samples: list[Sample] = []
@@ -668,8 +681,8 @@ class MotionControl:
         stop_neg, stop_pos = axis.s.stop_negative_pu, axis.s.stop_positive_pu
         settle = axis.s.settle_pu
         physical, velocity, acceleration = axis.physical, axis.velocity, axis.acceleration
-        p = v = 0.0
-        ran = 0
+        p = 0.0
+        t0 = t
         for p1, v1 in gen.demands(t, cyc):
             if t > t_limit:
                 break
@@ -686,32 +699,37 @@ class MotionControl:
                 ph1, va1, ac1 = axis.physical, axis.velocity, axis.acceleration
             pos = ph1 + offset
             err = abs(p1 - pos)
-            active = t < gen_end
-            warn = (W.WARN_POS_LAG_ALWAYS if err > lag_warn else 0) | \
-                   (W.WARN_POS_LAG_STANDING if not active and err > st_warn else 0)
-            in_window = target_ok and not active and abs(gen_target - pos) <= window
-            new_since = (t if since is None else since) if in_window else None
-            now_in_target = in_window and t - new_since >= hold
-            if (active != was_active or warn != warn_bits or err > lag_err or (not active and err > st_err)
-                    or (limits and (pos < lim_neg or pos > lim_pos)) or now_in_target != in_target
-                    or (not active and not (new_since is not None and not now_in_target)
-                        and abs(p1 - pos) < settle and abs(va1) * 1e-3 < settle)):   # Axis.at_rest
-                break
+            if active:
+                if err <= lag_lo or err > lag_hi or not lim_neg <= pos <= lim_pos:
+                    break
+                since = None
+            else:
+                warn = (W.WARN_POS_LAG_ALWAYS if err > lag_warn else 0) | \
+                       (W.WARN_POS_LAG_STANDING if err > st_warn else 0)
+                in_window = target_ok and abs(gen_target - pos) <= window
+                new_since = (t if since is None else since) if in_window else None
+                now_in_target = in_window and t - new_since >= hold
+                if (warn != warn_bits or err > lag_err or err > st_err or not lim_neg <= pos <= lim_pos
+                        or now_in_target != in_target
+                        or (not (new_since is not None and not now_in_target)
+                            and err < settle and abs(va1) * 1e-3 < settle)):      # Axis.at_rest
+                    break
+                since = new_since
             physical, velocity, acceleration = ph1, va1, ac1
-            p, v, prev_vd, since = p1, v1, v1, new_since
+            p = p1
+            prev_vd = v1
             sample = new_sample(Sample, (t, p1, pos, v1, va1, sv, sw)) if record else None
             if entries is not None:
                 entries.append((t, ph1, va1, ac1, v1, p1, v1, since, sample))
             elif record:
                 samples.append(sample)
-            ran += 1
             t += cyc
         axis.physical, axis.velocity, axis.acceleration = physical, velocity, acceleration
         self.trajectory.extend(samples)
-        if ran:
-            self.dem_p, self.dem_v, self._last_tick, self._now = p, v, t - cyc, t - cyc
+        if t > t0:
+            self.dem_p, self.dem_v, self._last_tick, self._now = p, prev_vd, t - cyc, t - cyc
         self._prev_vd, self._in_window_since, self._next_tick = prev_vd, since, t
-        return ran > 0
+        return t > t0
 
     def compute_ahead(self) -> int | None:
         """With quiet cycles ahead, the first cycle the generic path has to run (the drive's next timer)."""
@@ -923,8 +941,10 @@ class MotionControl:
         """Actual position 16 bit, demand current, demand position 16 bit as TxPDO2 carries them (the same
         values as variable(); one call, as TxPDO2 goes on every SYNC)."""
         scale = max(self.par(P_SCALE_POS, 1000), 1)
-        current = _s16(self.axis.demand_current_ma()) if self.running and self.controlled else 0
-        return (_s16(self.axis.position / scale) & 0xFFFF, current & 0xFFFF, _s16(self.dem_p / scale) & 0xFFFF)
+        axis = self.axis
+        current = _s16(axis.demand_current_ma()) if self.running and self.controlled else 0
+        return (_s16((axis.physical + axis.offset) / scale) & 0xFFFF, current & 0xFFFF,
+                _s16(self.dem_p / scale) & 0xFFFF)
 
     def variable(self, upid: int) -> int | None:
         """The value of an MC variable now (SDO reads, TxPDOs by UPID); None: not a variable of the MC."""

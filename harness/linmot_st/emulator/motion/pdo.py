@@ -282,9 +282,12 @@ class ProcessData:
             return None
         best = None
         for tx in self.tx:
-            for due in (tx.due, tx.event_due):
-                if due is not None and (best is None or due < best):
-                    best = due
+            due = tx.due
+            if due is not None and (best is None or due < best):
+                best = due
+            due = tx.event_due
+            if due is not None and (best is None or due < best):
+                best = due
         return best
 
     def on_timer(self, t: int) -> None:

@@ -61,21 +61,26 @@ class VaPlan:
     def demands(self, t_ns: int, step_ns: int):
         """(position, velocity) at t_ns, t_ns + step_ns, ...: `at`'s arithmetic, term for term (so the values
         are bit-identical), with the segment found by walking forward as time only grows."""
-        origin, end_s, segs = self.origin_ns, self.end_s, self._segs
-        last = len(segs) - 1
+        origin, end_s = self.origin_ns, self.end_s
+        segs = [(s.t, s.p, s.v, s.a) for s in self._segs]
+        inf = float("inf")
         i = 0
-        while True:
+        if segs:
+            st, sp, sv, sa = segs[0]
+            next_t = segs[1][0] if len(segs) > 1 else inf
+        while segs:
             t = (t_ns - origin) * NS
-            if t >= end_s or not segs:
+            if t >= end_s:
                 break
             if t <= 0:
                 yield self._start
             else:
-                while i < last and segs[i + 1].t <= t:
+                while t >= next_t:          # `at` takes the last segment that starts at or before t
                     i += 1
-                s = segs[i]
-                dt = t - s.t
-                yield s.p + s.v * dt + 0.5 * s.a * dt * dt, s.v + s.a * dt
+                    st, sp, sv, sa = segs[i]
+                    next_t = segs[i + 1][0] if i + 1 < len(segs) else inf
+                dt = t - st
+                yield sp + sv * dt + 0.5 * sa * dt * dt, sv + sa * dt
             t_ns += step_ns
         rest = (self.target, 0.0)
         while True:
