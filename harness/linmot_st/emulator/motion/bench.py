@@ -18,6 +18,7 @@ from ...bus import Frame, SimBus
 from ..drive import DriveTimings, E1100Drive
 from ..profile import load_profile
 from . import commands as C
+from .settings import MotionSettings
 
 MS = 1_000_000
 S = 1_000_000_000
@@ -69,14 +70,15 @@ class MotionMaster:
         return out
 
 
-def _setup(n_drives: int) -> tuple[SimBus, MotionMaster, list[E1100Drive]]:
+def _setup(n_drives: int, motion: MotionSettings | None = None) -> tuple[SimBus, MotionMaster, list[E1100Drive]]:
+    """The bench's bus; `motion` (default: the drive's own) lets tests run it with the fast path off."""
     # TxPDO2 on every SYNC (1801h sub 2 = 1) from power-on: a profile cannot set communication objects, so
     # the power-on value is patched the way a master would write it in Pre-Operational
     profile = load_profile().with_defaults({0x1194: 2, 0x1600: 2_800_000, 0x1601: -100_000})
     bus = SimBus(1_000_000)
     drives = []
     for n in range(1, n_drives + 1):
-        d = E1100Drive(n, profile, timings=DriveTimings.fast())
+        d = E1100Drive(n, profile, timings=DriveTimings.fast(), motion=motion)
         d.comm.objects[0x1801].subs[2].default = 1
         d.comm.reset()
         bus.attach(d, f"drive{n}")

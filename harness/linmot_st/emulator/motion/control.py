@@ -656,10 +656,14 @@ class MotionControl:
         window, hold = self.s.in_target_window_pu, self.s.in_target_hold_ns
         gen_target = gen.target
         # `active` (the setpoint generation runs) is the same in every quiet cycle of a run: the first cycle
-        # where it changes is not quiet. So a run while active ends before the plan's end at the latest.
-        active = not gen.done(self._now)
+        # where it changes is not quiet. It is the status word's Motion Active bit as last recorded (_plain
+        # excludes a running command table), not the plan at _now: _now may be a later observation time, and
+        # a plan that ended between the last cycle and it has not cleared the bit yet (the next cycle does).
+        active = bool(self.words[0] & W.SW_MOTION_ACTIVE)
         if active:
-            t_limit = min(t_limit, gen.end_ns - 1)
+            t_limit = min(t_limit, gen.end_ns - 1)      # a run while active ends before the plan's end
+        elif t < gen.end_ns:
+            return False                                # the plan runs again: the bit comes back
         warn_bits, in_target, since, prev_vd = self.warn_bits, self.in_target, self._in_window_since, self._prev_vd
         if not limits:
             lim_neg, lim_pos = -math.inf, math.inf
