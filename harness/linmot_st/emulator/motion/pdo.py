@@ -72,6 +72,7 @@ class ProcessData:
         self.operational = False
         self._sync_tx: list[_Tx] = []
         self._event_tx: list[_Tx] = []
+        self._timed_tx: list[_Tx] = []
         self.reset_image()
 
     # ------------------------------------------------------------------ configuration
@@ -108,6 +109,8 @@ class ProcessData:
         # the TxPDOs each SYNC and each publish() look at (fixed until the next start)
         self._sync_tx = [tx for tx in self.tx if 1 <= tx.ttype <= 240]
         self._event_tx = [tx for tx in self.tx if tx.ttype >= 254 and tx.pack is not None and tx.cob is not None]
+        # only these ever get a timer: `due` needs an inhibit time, `event_due` an event timer
+        self._timed_tx = [tx for tx in self.tx if tx.inhibit_ns or tx.event_ns]
         self.slave_used = self.rx_cob[2] is not None and self.rx3_mode in (0, 1, 2)
         self.sync_cob = comm.value(0x1005) & 0x7FF
         self._rx_pending = [None, None, None]
@@ -284,7 +287,7 @@ class ProcessData:
         if not self.operational:
             return None
         best = None
-        for tx in self.tx:
+        for tx in self._timed_tx:          # asked after every frame on the bus, by every drive
             due = tx.due
             if due is not None and (best is None or due < best):
                 best = due
@@ -296,7 +299,7 @@ class ProcessData:
     def on_timer(self, t: int) -> None:
         if not self.operational:
             return
-        for tx in self.tx:
+        for tx in self._timed_tx:
             if tx.due is not None and tx.due <= t:
                 tx.due = None
                 payload = tx.pack()
