@@ -29,6 +29,7 @@ from .faults import STAGE, Fault, Predicate
 from .frame import Frame
 
 STANDARD_BITRATES = (125_000, 250_000, 500_000, 1_000_000)
+_new_tuple = tuple.__new__
 TEC_BUS_OFF = 256   # transmit error counter: +8 per transmit error, -1 per success (CAN 2.0 fault confinement)
 
 
@@ -307,21 +308,22 @@ class SimBus:
             if actions and actions[0][0] < t_next:
                 t_next, kind = actions[0][0], 1
             timer_part = None
-            for p in parts:
+            ready = None
+            idle = tx is None
+            for p in parts:                       # one pass: the earliest timer, and the earliest queue head
                 pt = p.timer
                 if pt is not None and pt < t_next:
                     t_next, kind, timer_part = pt, 2, p
-            if tx is None:
-                ready = None
-                for p in parts:
-                    if p.queue:
-                        r = p.queue[0][0]
+                if idle:
+                    q = p.queue
+                    if q:
+                        r = q[0][0]
                         if ready is None or r < ready:
                             ready = r
-                if ready is not None:
-                    t_arb = ready if ready > self._idle_at else self._idle_at
-                    if t_arb < t_next and t_arb < t_end:
-                        t_next, kind = t_arb, 3
+            if ready is not None:
+                t_arb = ready if ready > self._idle_at else self._idle_at
+                if t_arb < t_next and t_arb < t_end:
+                    t_next, kind = t_arb, 3
             if kind < 0 or t_next > t_end:
                 break
             self.now = t_next
@@ -406,7 +408,7 @@ class SimBus:
                 else:
                     frame = fault.mutate(frame)
                     status = "mutated"
-        self.trace.append(TraceEntry(start, end, part.name, frame, status))
+        self.trace.append(_new_tuple(TraceEntry, (start, end, part.name, frame, status)))   # no Python __new__
         now = self.now
         for p in self._parts:
             if p is not part:

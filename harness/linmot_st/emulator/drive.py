@@ -453,4 +453,5 @@ class E1100Drive:
         self.mc.inject_error(code, t)
 
     def send_pdo(self, t: int, cob: int, payload: bytes) -> None:
-        self._send(t + self.timings.pdo_latency_ns, cob, payload)
+        # TxPDO2 goes on every SYNC: the frame is built without the checks its mapping already made
+        self._out.append((t + self.timings.pdo_latency_ns, Frame.checked_by_caller(cob, payload)))
