@@ -259,12 +259,14 @@ class SimBus:
         if part.bus_off:
             part.discarded += 1
             return
-        for fault in self._stage["queued"]:
-            if fault.matches(part.name, frame):
-                fault.hit(ready, part.name, frame)
-                ready += fault.delay_ns
-                if fault.fifo:
-                    part.hold_until = max(part.hold_until, ready)
+        queued_faults = self._stage["queued"]
+        if queued_faults:
+            for fault in queued_faults:
+                if fault.matches(part.name, frame):
+                    fault.hit(ready, part.name, frame)
+                    ready += fault.delay_ns
+                    if fault.fifo:
+                        part.hold_until = max(part.hold_until, ready)
         if ready < part.hold_until:
             ready = part.hold_until
         self._seq += 1
@@ -360,13 +362,15 @@ class SimBus:
                 return
             frame = winner.queue.pop(0)[2]
             status = "ok"
-            for fault in self._stage["start"]:
-                if fault.matches(winner.name, frame):
-                    fault.hit(t, winner.name, frame)
-                    status = fault.kind
-                    break
-            if status == "drop":
-                continue   # lost before the bus: the next candidate arbitrates at the same instant
+            start_faults = self._stage["start"]
+            if start_faults:
+                for fault in start_faults:
+                    if fault.matches(winner.name, frame):
+                        fault.hit(t, winner.name, frame)
+                        status = fault.kind
+                        break
+                if status == "drop":
+                    continue   # lost before the bus: the next candidate arbitrates at the same instant
             key = (frame.can_id, frame.data, frame.rtr, frame.rtr_dlc)
             bits = self._length_cache.get(key)
             if bits is None:
@@ -376,10 +380,12 @@ class SimBus:
             if status == "corrupt":
                 # the receivers' CRC check fails; their error flag starts after the ACK delimiter
                 bits = bits - 7 + ERROR_FRAME_BITS
-                self._tx = [winner, frame, t, t + bits * self.bit_ns, "error", True]
+                end = t + bits * self.bit_ns
+                self._tx = [winner, frame, t, end, "error", True]
             else:
-                self._tx = [winner, frame, t, t + bits * self.bit_ns, "ok", False]
-            self._idle_at = self._tx[3] + IFS_BITS * self.bit_ns
+                end = t + bits * self.bit_ns
+                self._tx = [winner, frame, t, end, "ok", False]
+            self._idle_at = end + IFS_BITS * self.bit_ns
             return
 
     def _end_tx(self, tx: list) -> None:
