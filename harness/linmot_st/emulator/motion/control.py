@@ -72,7 +72,8 @@ _PLAIN_STATES = frozenset({W.READY_TO_OPERATE, W.OPERATION_ENABLED, W.ABORTING, 
 
 
 def _s16(v: float) -> int:
-    return max(-32768, min(32767, int(round(v))))
+    x = round(v)                # an int for a float or an int (three times per TxPDO2, on every SYNC)
+    return -32768 if x < -32768 else 32767 if x > 32767 else x
 
 
 class MotionControl:
@@ -609,7 +610,8 @@ class MotionControl:
             if self._plain() and self._quiet_run(t, None):
                 continue
             self._cycle(self._next_tick)
-        self._now = max(self._now, t)
+        if t > self._now:
+            self._now = t
 
     def observe(self, t: int) -> None:
         """Bring the inspectable state to time t (cycles computed ahead are taken over; nothing changes what
@@ -702,7 +704,9 @@ class MotionControl:
                 axis.follow(p1, prev_vd, v1)
                 ph1, va1, ac1 = axis.physical, axis.velocity, axis.acceleration
             pos = ph1 + offset
-            err = abs(p1 - pos)
+            err = p1 - pos                              # abs() without the builtin call (exact for floats)
+            if err < 0:
+                err = -err
             if active:
                 if err <= lag_lo or err > lag_hi or not lim_neg <= pos <= lim_pos:
                     break
