@@ -5,7 +5,9 @@ N emulated E1100 drives on one 1 Mbit/s SimBus with a master node that plays a P
 homes them, then sends each drive a VAI 16-bit move back and forth (0 <-> 100 mm, 1 m/s, 10 m/s^2; a new
 target every 300 ms, so the axes move about two thirds of the time) and a SYNC every 4 ms. The drives send
 TxPDO2 on every SYNC and TxPDO1 on change, as a bus of 16 axes has to be set up (TxPDO2 on change every 1 ms MC
-cycle would need 2 Mbit/s). The figure is simulated seconds of motion per wall second, best of the runs.
+cycle would need 2 Mbit/s). The figure is simulated seconds of motion per wall second, best of the runs; beside
+it the same per CPU second of this process (what the model costs, less disturbed by other processes on a shared
+machine), the frames per wall second and the load average, to read the figure against.
 """
 
 from __future__ import annotations
@@ -112,16 +114,17 @@ def run(runs: int = 3) -> list[dict]:
     load average taken right after, so that a figure below target under load can be told from a slow model."""
     rows = []
     for n, target in ((1, ">= 200"), (16, None)):
-        best, info = 0.0, {}
+        best, info, best_cpu = 0.0, {}, 0.0
         for _ in range(runs):
             x, i = simulated_per_wall(n, 5.0 if n == 1 else 2.0)
+            best_cpu = max(best_cpu, i["per_cpu"])
             if x > best:
                 best, info = x, i
         load = os.getloadavg()[0]
         what = f"moving axes: {n} drive{'s' if n > 1 else ''}"
         rows += [
             dict(name=f"{what}, simulated s per wall s", value=round(best, 1), unit="x", target=target),
-            dict(name=f"{what}, simulated s per CPU s of this process (same run)", value=round(info["per_cpu"], 1),
+            dict(name=f"{what}, simulated s per CPU s of this process (best run)", value=round(best_cpu, 1),
                  unit="x", target=None),
             dict(name=f"{what}, frames per wall s", value=round(info["frames_per_s"]), unit="frames/s",
                  target=None),
