@@ -135,6 +135,41 @@ def run(runs: int = 3) -> list[dict]:
     return rows
 
 
+def opcodes_per_simulated_second(n_drives: int = 1, seconds: float = 1.0, top: int = 12) -> tuple[float, list]:
+    """A figure that load cannot disturb: Python bytecodes executed per simulated second of the bench scenario
+    (sys.settrace with opcode events), and the functions that execute most of them. Work done inside C
+    (struct, dict, list methods) is not counted: compare runs with it, then confirm with the timed figure."""
+    import collections
+    import sys
+
+    bus, master, _ = _setup(n_drives)
+    bus.run_until(master.moves_from)
+    ops: collections.Counter = collections.Counter()
+
+    def tracer(frame, event, arg):
+        if event == "call":
+            frame.f_trace_opcodes = True
+        elif event == "opcode":
+            code = frame.f_code
+            ops[f"{code.co_filename.rsplit('linmot_st/', 1)[-1]}:{code.co_name}"] += 1
+        return tracer
+
+    sys.settrace(tracer)
+    try:
+        bus.run_until(master.moves_from + int(seconds * S))
+    finally:
+        sys.settrace(None)
+    return sum(ops.values()) / seconds, [(name, n / seconds) for name, n in ops.most_common(top)]
+
+
 if __name__ == "__main__":
+    import sys
+
+    if "--opcodes" in sys.argv:
+        total, top = opcodes_per_simulated_second()
+        print(f"1 drive: {total:,.0f} Python opcodes per simulated second; most of them in")
+        for name, n in top:
+            print(f"  {n:>12,.0f}  {name}")
+        raise SystemExit(0)
     for r in run():
         print(f"{r['name']:<72} {r['value']:>10,} {r['unit']:<9} {'target ' + r['target'] if r['target'] else ''}")
