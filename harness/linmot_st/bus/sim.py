@@ -299,7 +299,7 @@ class SimBus:
         for p in parts:
             if p.has_timer:
                 t = p.node.next_timer_ns()
-                p.timer = None if t is None else (int(t) if t > now else now)
+                p.timer = None if t is None else (t if t > now else now)
         while True:
             tx = self._tx
             # the earliest event; ties go to the first kind checked
