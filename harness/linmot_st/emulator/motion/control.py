@@ -13,6 +13,7 @@ Every behaviour that no source states is marked INFERRED here and listed in docs
 from __future__ import annotations
 
 import math
+import struct
 from bisect import bisect_right
 from operator import itemgetter
 from typing import Callable
@@ -69,6 +70,9 @@ _NEEDS_HOMING = {
 _ANY_STATE = {C.NOP, C.WRITE_CONTROL_WORD, C.WRITE_LIVE_PARAMETER}
 
 _PLAIN_STATES = frozenset({W.READY_TO_OPERATE, W.OPERATION_ENABLED, W.ABORTING, W.FREEZING})
+
+
+_TXPDO2 = struct.Struct("<HHHH")
 
 
 def _s16(v: float) -> int:
@@ -945,14 +949,15 @@ class MotionControl:
         """A position in the 16-bit interface scaling (1B94h, 1B95h; INFERRED: saturated)."""
         return _s16(pu / max(self.par(P_SCALE_POS, 1000), 1))
 
-    def txpdo2_values(self) -> tuple[int, int, int]:
-        """Actual position 16 bit, demand current, demand position 16 bit as TxPDO2 carries them (the same
-        values as variable(); one call, as TxPDO2 goes on every SYNC)."""
+    def txpdo2_payload(self) -> bytes:
+        """TxPDO2's default content ([CO1100] 5.1): motion command status (the last header), actual position
+        16 bit, demand current, demand position 16 bit; the same values as variable(), packed in one call with
+        a precomputed struct, as TxPDO2 goes on every SYNC."""
         scale = max(self.par(P_SCALE_POS, 1000), 1)
         axis = self.axis
         current = _s16(axis.demand_current_ma()) if self.running and self.controlled else 0
-        return (_s16((axis.physical + axis.offset) / scale) & 0xFFFF, current & 0xFFFF,
-                _s16(self.dem_p / scale) & 0xFFFF)
+        return _TXPDO2.pack(self.last_header, _s16((axis.physical + axis.offset) / scale) & 0xFFFF,
+                            current & 0xFFFF, _s16(self.dem_p / scale) & 0xFFFF)
 
     def variable(self, upid: int) -> int | None:
         """The value of an MC variable now (SDO reads, TxPDOs by UPID); None: not a variable of the MC."""

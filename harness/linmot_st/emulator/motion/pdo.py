@@ -157,7 +157,7 @@ class ProcessData:
         if n == 0:                      # status word, state var, logged error code, warn word
             return lambda: pack(*mc.words)
         if n == 1:                      # motion command status, actual position 16 bit, current, demand pos 16 bit
-            return lambda: pack(mc.last_header, *mc.txpdo2_values())
+            return mc.txpdo2_payload
         return None                     # TxPDO3: empty unless mapped by UPID
 
     def _upid_item(self, upid: int) -> tuple[str, Callable[[], int]]:
