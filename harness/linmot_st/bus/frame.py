@@ -26,6 +26,19 @@ class Frame:
         if not 0 <= self.rtr_dlc <= 8 or (self.rtr_dlc and not self.rtr):
             raise ValueError(f"rtr_dlc {self.rtr_dlc} is only for remote frames, 0..8")
 
+    @classmethod
+    def checked_by_caller(cls, can_id: int, data: bytes) -> "Frame":
+        """A data frame without __post_init__'s checks, for a hot path whose identifier is 11-bit and whose
+        data is at most 8 bytes by construction (the emulated drive's PDOs: COB-ID masked with 7FFh, a
+        mapping longer than 8 bytes refused)."""
+        f = object.__new__(cls)
+        set_field = object.__setattr__
+        set_field(f, "can_id", can_id)
+        set_field(f, "data", data)
+        set_field(f, "rtr", False)
+        set_field(f, "rtr_dlc", 0)
+        return f
+
     @property
     def dlc(self) -> int:
         return self.rtr_dlc if self.rtr else len(self.data)

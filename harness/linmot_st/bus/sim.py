@@ -29,6 +29,7 @@ from .faults import STAGE, Fault, Predicate
 from .frame import Frame
 
 STANDARD_BITRATES = (125_000, 250_000, 500_000, 1_000_000)
+_new_tuple = tuple.__new__
 TEC_BUS_OFF = 256   # transmit error counter: +8 per transmit error, -1 per success (CAN 2.0 fault confinement)
 
 
@@ -106,7 +107,8 @@ class SimBus:
         self._tx: list | None = None     # in flight: [part, frame, start, end, status, retransmit]
         self._idle_at = 0                # the bus is free for arbitration from this time on
         self._actions: list[tuple[int, int, Callable[[int], Any]]] = []
-        self._length_cache: dict[Frame, int] = {}
+        # frame length by (id, data, rtr, rtr_dlc): a tuple hashes in C, a Frame through its dataclass __hash__
+        self._length_cache: dict[tuple, int] = {}
         self._stage: dict[str, list[Fault]] = {"queued": [], "start": [], "end": []}
 
     # -- participants -----------------------------------------------------------------------
@@ -257,12 +259,14 @@ class SimBus:
         if part.bus_off:
             part.discarded += 1
             return
-        for fault in self._stage["queued"]:
-            if fault.matches(part.name, frame):
-                fault.hit(ready, part.name, frame)
-                ready += fault.delay_ns
-                if fault.fifo:
-                    part.hold_until = max(part.hold_until, ready)
+        queued_faults = self._stage["queued"]
+        if queued_faults:
+            for fault in queued_faults:
+                if fault.matches(part.name, frame):
+                    fault.hit(ready, part.name, frame)
+                    ready += fault.delay_ns
+                    if fault.fifo:
+                        part.hold_until = max(part.hold_until, ready)
         if ready < part.hold_until:
             ready = part.hold_until
         self._seq += 1
@@ -306,21 +310,22 @@ class SimBus:
             if actions and actions[0][0] < t_next:
                 t_next, kind = actions[0][0], 1
             timer_part = None
-            for p in parts:
+            ready = None
+            idle = tx is None
+            for p in parts:                       # one pass: the earliest timer, and the earliest queue head
                 pt = p.timer
                 if pt is not None and pt < t_next:
                     t_next, kind, timer_part = pt, 2, p
-            if tx is None:
-                ready = None
-                for p in parts:
-                    if p.queue:
-                        r = p.queue[0][0]
+                if idle:
+                    q = p.queue
+                    if q:
+                        r = q[0][0]
                         if ready is None or r < ready:
                             ready = r
-                if ready is not None:
-                    t_arb = ready if ready > self._idle_at else self._idle_at
-                    if t_arb < t_next and t_arb < t_end:
-                        t_next, kind = t_arb, 3
+            if ready is not None:
+                t_arb = ready if ready > self._idle_at else self._idle_at
+                if t_arb < t_next and t_arb < t_end:
+                    t_next, kind = t_arb, 3
             if kind < 0 or t_next > t_end:
                 break
             self.now = t_next
@@ -346,34 +351,41 @@ class SimBus:
 
     def _arbitrate(self, t: int) -> None:
         while True:
-            winner = None
+            winner, best = None, 0x800
             for p in self._parts:
                 q = p.queue
-                if q and q[0][0] <= t and (winner is None or q[0][2].can_id < winner.queue[0][2].can_id):
-                    winner = p
+                if q:
+                    head = q[0]
+                    if head[0] <= t and head[2].can_id < best:
+                        winner, best = p, head[2].can_id
             if winner is None:
                 return
             frame = winner.queue.pop(0)[2]
             status = "ok"
-            for fault in self._stage["start"]:
-                if fault.matches(winner.name, frame):
-                    fault.hit(t, winner.name, frame)
-                    status = fault.kind
-                    break
-            if status == "drop":
-                continue   # lost before the bus: the next candidate arbitrates at the same instant
-            bits = self._length_cache.get(frame)
+            start_faults = self._stage["start"]
+            if start_faults:
+                for fault in start_faults:
+                    if fault.matches(winner.name, frame):
+                        fault.hit(t, winner.name, frame)
+                        status = fault.kind
+                        break
+                if status == "drop":
+                    continue   # lost before the bus: the next candidate arbitrates at the same instant
+            key = (frame.can_id, frame.data, frame.rtr, frame.rtr_dlc)
+            bits = self._length_cache.get(key)
             if bits is None:
                 if len(self._length_cache) > 100_000:
                     self._length_cache.clear()
-                bits = self._length_cache[frame] = frame_length_bits(frame)
+                bits = self._length_cache[key] = frame_length_bits(frame)
             if status == "corrupt":
                 # the receivers' CRC check fails; their error flag starts after the ACK delimiter
                 bits = bits - 7 + ERROR_FRAME_BITS
-                self._tx = [winner, frame, t, t + bits * self.bit_ns, "error", True]
+                end = t + bits * self.bit_ns
+                self._tx = [winner, frame, t, end, "error", True]
             else:
-                self._tx = [winner, frame, t, t + bits * self.bit_ns, "ok", False]
-            self._idle_at = self._tx[3] + IFS_BITS * self.bit_ns
+                end = t + bits * self.bit_ns
+                self._tx = [winner, frame, t, end, "ok", False]
+            self._idle_at = end + IFS_BITS * self.bit_ns
             return
 
     def _end_tx(self, tx: list) -> None:
@@ -402,13 +414,16 @@ class SimBus:
                 else:
                     frame = fault.mutate(frame)
                     status = "mutated"
-        self.trace.append(TraceEntry(start, end, part.name, frame, status))
+        self.trace.append(_new_tuple(TraceEntry, (start, end, part.name, frame, status)))   # no Python __new__
+        now = self.now
         for p in self._parts:
             if p is not part:
-                out = p.node.on_frame(frame, end)
+                node = p.node
+                out = node.on_frame(frame, end)
                 if out:
                     self._queue_all(p, end, out)
-                self._read_timer(p)
+                t = node.next_timer_ns()          # _read_timer, inlined: once per receiver and frame
+                p.timer = None if t is None else (int(t) if t > now else now)
         if duplicate and self._parts_by_name.get(part.name) is part:
             self._requeue_first(part, end, sent)
 

@@ -137,7 +137,8 @@ class E1100Drive:
         self.mc_phase = "stopped"
 
     def on_frame(self, frame, t_ns: int) -> list:
-        self.now_ns = max(self.now_ns, t_ns)
+        if t_ns > self.now_ns:              # max() without the builtin call: every frame on the bus comes here
+            self.now_ns = t_ns
         if self.nmt_state in (OFF, BOOTING) or frame.rtr:
             return []
         cid, data = frame.can_id, frame.data
@@ -182,12 +183,17 @@ class E1100Drive:
         self._at(at_ns, fire)
 
     def next_timer_ns(self) -> int | None:
-        while self._events and not self._live(self._events[0]):
-            heapq.heappop(self._events)
-        t = self._events[0].t if self._events else None
-        for other in (self.mc.next_timer_ns(self.pdo.cycle_sensitive), self.pdo.next_timer_ns()):
-            if other is not None and (t is None or other < t):
-                t = other
+        events = self._events              # the bus asks after every frame: kept free of allocations
+        while events and not self._live(events[0]):
+            heapq.heappop(events)
+        t = events[0].t if events else None
+        pdo = self.pdo
+        other = self.mc.next_timer_ns(pdo.cycle_sensitive)
+        if other is not None and (t is None or other < t):
+            t = other
+        other = pdo.next_timer_ns()
+        if other is not None and (t is None or other < t):
+            t = other
         return t
 
     def receive_ids(self) -> list[int]:
@@ -265,8 +271,11 @@ class E1100Drive:
         self._out.append((t, Frame(can_id, data)))
 
     def _take(self, t_ns: int) -> list:
-        out, self._out = self._out, []
-        return [(max(t, t_ns), f) for t, f in out]
+        out = self._out
+        if not out:
+            return []
+        self._out = []
+        return [(t if t > t_ns else t_ns, f) for t, f in out]
 
     def _operating_ms(self, t_ns: int) -> int:
         return self.profile.identity.operating_hours * 3_600_000 + t_ns // MS
@@ -448,4 +457,5 @@ class E1100Drive:
         self.mc.inject_error(code, t)
 
     def send_pdo(self, t: int, cob: int, payload: bytes) -> None:
-        self._send(t + self.timings.pdo_latency_ns, cob, payload)
+        # TxPDO2 goes on every SYNC: the frame is built without the checks its mapping already made
+        self._out.append((t + self.timings.pdo_latency_ns, Frame.checked_by_caller(cob, payload)))

@@ -12,6 +12,10 @@ Every behaviour that no source states is marked INFERRED here and listed in docs
 
 from __future__ import annotations
 
+import math
+import struct
+from bisect import bisect_right
+from operator import itemgetter
 from typing import Callable
 
 from . import commands as C
@@ -68,8 +72,12 @@ _ANY_STATE = {C.NOP, C.WRITE_CONTROL_WORD, C.WRITE_LIVE_PARAMETER}
 _PLAIN_STATES = frozenset({W.READY_TO_OPERATE, W.OPERATION_ENABLED, W.ABORTING, W.FREEZING})
 
 
+_TXPDO2 = struct.Struct("<HHHH")
+
+
 def _s16(v: float) -> int:
-    return max(-32768, min(32767, int(round(v))))
+    x = round(v)                # an int for a float or an int (three times per TxPDO2, on every SYNC)
+    return -32768 if x < -32768 else 32767 if x > 32767 else x
 
 
 class MotionControl:
@@ -571,7 +579,7 @@ class MotionControl:
         after the quiet ones computed ahead."""
         t = self._next_tick
         if t is not None and not cycle_sensitive:
-            ahead = self.compute_ahead()
+            ahead = self._ahead[-1][0] + self.s.cycle_ns if self._ahead else self.compute_ahead()
             if ahead is not None:
                 t = ahead
         if self._hw_test_end is not None and (t is None or self._hw_test_end < t):
@@ -606,7 +614,8 @@ class MotionControl:
             if self._plain() and self._quiet_run(t, None):
                 continue
             self._cycle(self._next_tick)
-        self._now = max(self._now, t)
+        if t > self._now:
+            self._now = t
 
     def observe(self, t: int) -> None:
         """Bring the inspectable state to time t (cycles computed ahead are taken over; nothing changes what
@@ -638,7 +647,11 @@ class MotionControl:
 
     def _quiet_run(self, t_limit: int, entries: list | None = None) -> bool:
         """Commit quiet cycles from the next tick up to t_limit; True when any ran. It stops before the first
-        cycle that is not quiet: the generic cycle runs that one. `entries` collects each cycle's state."""
+        cycle that is not quiet: the generic cycle runs that one. `entries` collects each cycle's state.
+
+        The hottest loop of the model: the demand comes from the plan's `demands` walk, Axis.follow's
+        arithmetic is inlined term for term (so every value is bit-identical to the generic cycle's; the
+        equivalence tests compare them exactly), the state lives in locals and is written back once."""
         gen, axis, par = self.gen, self.axis, self.par
         cyc, t = self.s.cycle_ns, self._next_tick
         lag_warn, lag_err = par(P_LAG_ALWAYS_WARN, 1 << 31), par(P_LAG_ALWAYS_ERROR, 1 << 31)
@@ -647,39 +660,88 @@ class MotionControl:
         lim_neg, lim_pos = par(P_LIMIT_NEGATIVE, -(1 << 31)), par(P_LIMIT_POSITIVE, 1 << 31)
         target_ok = self.state >= W.OPERATION_ENABLED
         window, hold = self.s.in_target_window_pu, self.s.in_target_hold_ns
-        was_active = not gen.done(self._now)
+        gen_target = gen.target
+        # `active` (the setpoint generation runs) is the same in every quiet cycle of a run: the first cycle
+        # where it changes is not quiet. It is the status word's Motion Active bit as last recorded (_plain
+        # excludes a running command table), not the plan at _now: _now may be a later observation time, and
+        # a plan that ended between the last cycle and it has not cleared the bit yet (the next cycle does).
+        active = bool(self.words[0] & W.SW_MOTION_ACTIVE)
+        if active:
+            t_limit = min(t_limit, gen.end_ns - 1)      # a run while active ends before the plan's end
+        elif t < gen.end_ns:
+            return False                                # the plan runs again: the bit comes back
         warn_bits, in_target, since, prev_vd = self.warn_bits, self.in_target, self._in_window_since, self._prev_vd
+        if not limits:
+            lim_neg, lim_pos = -math.inf, math.inf
+        # while active: the warn word has no standing bit, the axis is never in the target window
+        if active and (in_target or warn_bits & ~W.WARN_POS_LAG_ALWAYS):
+            return False
+        # while active, a cycle is quiet when lag_lo < err <= lag_hi (the always-warn bit and error unchanged)
+        lag_lo = lag_warn if warn_bits & W.WARN_POS_LAG_ALWAYS else -1.0
+        lag_hi = lag_err if warn_bits & W.WARN_POS_LAG_ALWAYS else min(lag_warn, lag_err)
         sw, sv = self.words[0], self.words[1]
-        record = self.trajectory.add if self.s.record_trajectory else None
-        ran = 0
-        while t <= t_limit:
-            saved = (axis.physical, axis.velocity, axis.acceleration)
-            p, v, _ = gen.at(t)
-            axis.follow(p, prev_vd, v)
-            pos = axis.position
-            err = abs(p - pos)
-            active = not gen.done(t)
-            warn = (W.WARN_POS_LAG_ALWAYS if err > lag_warn else 0) | \
-                   (W.WARN_POS_LAG_STANDING if not active and err > st_warn else 0)
-            in_window = target_ok and not active and abs(gen.target - pos) <= window
-            new_since = (t if since is None else since) if in_window else None
-            now_in_target = in_window and t - new_since >= hold
-            if (active != was_active or warn != warn_bits or err > lag_err or (not active and err > st_err)
-                    or (limits and (pos < lim_neg or pos > lim_pos)) or now_in_target != in_target
-                    or (not active and not (new_since is not None and not now_in_target) and axis.at_rest(p))):
-                axis.physical, axis.velocity, axis.acceleration = saved
+        record = self.s.record_trajectory
+        samples: list[Sample] = []
+        new_sample = tuple.__new__          # Sample(...) without its Python-level __new__
+        # Axis.follow, inlined (its constants, then its state in locals)
+        h, offset = axis.h, axis.offset
+        p00, p01, p10, p11 = axis._phi
+        g0, g1 = axis._gam
+        one_kff = 1.0 - axis._kff
+        stop_neg, stop_pos = axis.s.stop_negative_pu, axis.s.stop_positive_pu
+        settle = axis.s.settle_pu
+        physical, velocity, acceleration = axis.physical, axis.velocity, axis.acceleration
+        p = 0.0
+        t0 = t
+        for p1, v1 in gen.demands(t, cyc):
+            if t > t_limit:
                 break
-            prev_vd, since = v, new_since
-            self.dem_p, self.dem_v, self._last_tick, self._now = p, v, t, t
-            sample = Sample(t, p, pos, v, axis.velocity, sv, sw) if record is not None else None
+            e = p1 - (v1 - prev_vd) * h / 2 - prev_vd * h - (physical + offset)
+            ed = prev_vd - velocity
+            u = one_kff * (v1 - prev_vd) / h
+            ph1 = p1 - (p00 * e + p01 * ed + g0 * u) - offset
+            if stop_neg <= ph1 <= stop_pos:
+                va1 = v1 - (p10 * e + p11 * ed + g1 * u)
+                ac1 = (va1 - velocity) / h
+            else:                                   # on a mechanical stop: Axis.follow's own path
+                axis.physical, axis.velocity, axis.acceleration = physical, velocity, acceleration
+                axis.follow(p1, prev_vd, v1)
+                ph1, va1, ac1 = axis.physical, axis.velocity, axis.acceleration
+            pos = ph1 + offset
+            err = p1 - pos                              # abs() without the builtin call (exact for floats)
+            if err < 0:
+                err = -err
+            if active:
+                if err <= lag_lo or err > lag_hi or not lim_neg <= pos <= lim_pos:
+                    break
+                since = None
+            else:
+                warn = (W.WARN_POS_LAG_ALWAYS if err > lag_warn else 0) | \
+                       (W.WARN_POS_LAG_STANDING if err > st_warn else 0)
+                in_window = target_ok and abs(gen_target - pos) <= window
+                new_since = (t if since is None else since) if in_window else None
+                now_in_target = in_window and t - new_since >= hold
+                if (warn != warn_bits or err > lag_err or err > st_err or not lim_neg <= pos <= lim_pos
+                        or now_in_target != in_target
+                        or (not (new_since is not None and not now_in_target)
+                            and err < settle and abs(va1) * 1e-3 < settle)):      # Axis.at_rest
+                    break
+                since = new_since
+            physical, velocity, acceleration = ph1, va1, ac1
+            p = p1
+            prev_vd = v1
+            sample = new_sample(Sample, (t, p1, pos, v1, va1, sv, sw)) if record else None
             if entries is not None:
-                entries.append((t, axis.physical, axis.velocity, axis.acceleration, v, p, v, since, sample))
-            elif sample is not None:
-                record(sample)
-            ran += 1
+                entries.append((t, ph1, va1, ac1, v1, p1, v1, since, sample))
+            elif record:
+                samples.append(sample)
             t += cyc
+        axis.physical, axis.velocity, axis.acceleration = physical, velocity, acceleration
+        self.trajectory.extend(samples)
+        if t > t0:
+            self.dem_p, self.dem_v, self._last_tick, self._now = p, prev_vd, t - cyc, t - cyc
         self._prev_vd, self._in_window_since, self._next_tick = prev_vd, since, t
-        return ran > 0
+        return t > t0
 
     def compute_ahead(self) -> int | None:
         """With quiet cycles ahead, the first cycle the generic path has to run (the drive's next timer)."""
@@ -699,13 +761,11 @@ class MotionControl:
 
     def _apply_ahead(self, t: int) -> None:
         """Take over the cycles computed ahead up to t."""
-        ahead, k = self._ahead, 0
-        add = self.trajectory.add
-        while k < len(ahead) and ahead[k][0] <= t:
-            if ahead[k][8] is not None:
-                add(ahead[k][8])
-            k += 1
+        ahead = self._ahead
+        k = bisect_right(ahead, t, key=itemgetter(0))
         if k:
+            if ahead[0][8] is not None:
+                self.trajectory.extend([e[8] for e in ahead[:k]])
             (tk, self.axis.physical, self.axis.velocity, self.axis.acceleration, self._prev_vd, self.dem_p,
              self.dem_v, self._in_window_since, _) = ahead[k - 1]
             self._last_tick, self._next_tick, self._now = tk, tk + self.s.cycle_ns, tk
@@ -889,12 +949,15 @@ class MotionControl:
         """A position in the 16-bit interface scaling (1B94h, 1B95h; INFERRED: saturated)."""
         return _s16(pu / max(self.par(P_SCALE_POS, 1000), 1))
 
-    def txpdo2_values(self) -> tuple[int, int, int]:
-        """Actual position 16 bit, demand current, demand position 16 bit as TxPDO2 carries them (the same
-        values as variable(); one call, as TxPDO2 goes on every SYNC)."""
+    def txpdo2_payload(self) -> bytes:
+        """TxPDO2's default content ([CO1100] 5.1): motion command status (the last header), actual position
+        16 bit, demand current, demand position 16 bit; the same values as variable(), packed in one call with
+        a precomputed struct, as TxPDO2 goes on every SYNC."""
         scale = max(self.par(P_SCALE_POS, 1000), 1)
-        current = _s16(self.axis.demand_current_ma()) if self.running and self.controlled else 0
-        return (_s16(self.axis.position / scale) & 0xFFFF, current & 0xFFFF, _s16(self.dem_p / scale) & 0xFFFF)
+        axis = self.axis
+        current = _s16(axis.demand_current_ma()) if self.running and self.controlled else 0
+        return _TXPDO2.pack(self.last_header, _s16((axis.physical + axis.offset) / scale) & 0xFFFF,
+                            current & 0xFFFF, _s16(self.dem_p / scale) & 0xFFFF)
 
     def variable(self, upid: int) -> int | None:
         """The value of an MC variable now (SDO reads, TxPDOs by UPID); None: not a variable of the MC."""

@@ -70,6 +70,9 @@ class ProcessData:
         self.rx_on_sync = self.slave_used = self.cycle_sensitive = False
         self.sync_cob = 0x080
         self.operational = False
+        self._sync_tx: list[_Tx] = []
+        self._event_tx: list[_Tx] = []
+        self._timed_tx: list[_Tx] = []
         self.reset_image()
 
     # ------------------------------------------------------------------ configuration
@@ -103,6 +106,11 @@ class ProcessData:
             tx.pack, tx.cycle_sensitive = self._mapping(n, t)
             sync_rx = sync_rx or 1 <= tx.ttype <= 240
         self.rx_on_sync = sync_rx
+        # the TxPDOs each SYNC and each publish() look at (fixed until the next start)
+        self._sync_tx = [tx for tx in self.tx if 1 <= tx.ttype <= 240]
+        self._event_tx = [tx for tx in self.tx if tx.ttype >= 254 and tx.pack is not None and tx.cob is not None]
+        # only these ever get a timer: `due` needs an inhibit time, `event_due` an event timer
+        self._timed_tx = [tx for tx in self.tx if tx.inhibit_ns or tx.event_ns]
         self.slave_used = self.rx_cob[2] is not None and self.rx3_mode in (0, 1, 2)
         self.sync_cob = comm.value(0x1005) & 0x7FF
         self._rx_pending = [None, None, None]
@@ -149,7 +157,7 @@ class ProcessData:
         if n == 0:                      # status word, state var, logged error code, warn word
             return lambda: pack(*mc.words)
         if n == 1:                      # motion command status, actual position 16 bit, current, demand pos 16 bit
-            return lambda: pack(mc.last_header, *mc.txpdo2_values())
+            return mc.txpdo2_payload
         return None                     # TxPDO3: empty unless mapped by UPID
 
     def _upid_item(self, upid: int) -> tuple[str, Callable[[], int]]:
@@ -232,17 +240,17 @@ class ProcessData:
                 self.drive.mc._write_live(upid, data[2 * k] | data[2 * k + 1] << 8)
 
     def _on_sync(self, t: int) -> None:
-        if self.rx_on_sync:
+        pending = self._rx_pending
+        if self.rx_on_sync and (pending[0] is not None or pending[1] is not None or pending[2] is not None):
             for n in range(3):
-                data, self._rx_pending[n] = self._rx_pending[n], None
+                data, pending[n] = pending[n], None
                 if data is not None:
                     self._apply_rx(n, data, t)
-        for tx in self.tx:
-            if 1 <= tx.ttype <= 240:
-                tx.sync_count += 1
-                if tx.sync_count >= tx.ttype:
-                    tx.sync_count = 0
-                    self._send(tx, t)
+        for tx in self._sync_tx:
+            tx.sync_count += 1
+            if tx.sync_count >= tx.ttype:
+                tx.sync_count = 0
+                self._send(tx, t)
         self.publish(t)
 
     # ------------------------------------------------------------------ frames out
@@ -250,9 +258,7 @@ class ProcessData:
         """Event-driven TxPDOs (254, 255) whose content changed go now, or when their inhibit time ends."""
         if not self.operational:
             return
-        for tx in self.tx:
-            if tx.ttype < 254 or tx.pack is None or tx.cob is None:
-                continue
+        for tx in self._event_tx:
             if tx.last_sent is None:
                 self._send(tx, t)               # entering Operational: every event-driven TxPDO goes once
                 continue
@@ -281,16 +287,19 @@ class ProcessData:
         if not self.operational:
             return None
         best = None
-        for tx in self.tx:
-            for due in (tx.due, tx.event_due):
-                if due is not None and (best is None or due < best):
-                    best = due
+        for tx in self._timed_tx:          # asked after every frame on the bus, by every drive
+            due = tx.due
+            if due is not None and (best is None or due < best):
+                best = due
+            due = tx.event_due
+            if due is not None and (best is None or due < best):
+                best = due
         return best
 
     def on_timer(self, t: int) -> None:
         if not self.operational:
             return
-        for tx in self.tx:
+        for tx in self._timed_tx:
             if tx.due is not None and tx.due <= t:
                 tx.due = None
                 payload = tx.pack()

@@ -3,7 +3,8 @@
 A generator is planned once, when its command starts, and evaluated at any time after that: `at(t_ns)` gives
 the demand position (pu), velocity (pu/s) and acceleration (pu/s^2). Plans are exact (piecewise constant
 acceleration, or linear between curve setpoints); the MC samples them once per cycle, so a motion ends within
-one cycle of its planned end.
+one cycle of its planned end. `demands(t_ns, step_ns)` yields the same (position, velocity) as `at` at t_ns,
+t_ns + step_ns, ... without a call per sample (the quiet MC cycles take their demand from it).
 """
 
 from __future__ import annotations
@@ -56,6 +57,34 @@ class VaPlan:
 
     def done(self, t_ns: int) -> bool:
         return t_ns >= self.end_ns
+
+    def demands(self, t_ns: int, step_ns: int):
+        """(position, velocity) at t_ns, t_ns + step_ns, ...: `at`'s arithmetic, term for term (so the values
+        are bit-identical), with the segment found by walking forward as time only grows."""
+        origin, end_s = self.origin_ns, self.end_s
+        segs = [(s.t, s.p, s.v, s.a) for s in self._segs]
+        inf = float("inf")
+        i = 0
+        if segs:
+            st, sp, sv, sa = segs[0]
+            next_t = segs[1][0] if len(segs) > 1 else inf
+        while segs:
+            t = (t_ns - origin) * NS
+            if t >= end_s:
+                break
+            if t <= 0:
+                yield self._start
+            else:
+                while t >= next_t:          # `at` takes the last segment that starts at or before t
+                    i += 1
+                    st, sp, sv, sa = segs[i]
+                    next_t = segs[i + 1][0] if i + 1 < len(segs) else inf
+                dt = t - st
+                yield sp + sv * dt + 0.5 * sa * dt * dt, sv + sa * dt
+            t_ns += step_ns
+        rest = (self.target, 0.0)
+        while True:
+            yield rest
 
 
 def _plan(segs: list[_Seg], t: float, p: float, v: float, target: float, vmax: float, acc: float,
@@ -143,6 +172,9 @@ class CurvePlan:
     def done(self, t_ns: int) -> bool:
         return t_ns >= self.end_ns
 
+    def demands(self, t_ns: int, step_ns: int):
+        return _demands_by_at(self, t_ns, step_ns)
+
 
 class Hold:
     """No setpoint generation: the demand rests at a position."""
@@ -158,3 +190,16 @@ class Hold:
 
     def done(self, t_ns: int) -> bool:
         return True
+
+    def demands(self, t_ns: int, step_ns: int):
+        rest = (self.target, 0.0)
+        while True:
+            yield rest
+
+
+def _demands_by_at(plan, t_ns: int, step_ns: int):
+    """`demands` through `at`, for a plan without a faster walk."""
+    while True:
+        p, v, _ = plan.at(t_ns)
+        yield p, v
+        t_ns += step_ns

@@ -42,6 +42,12 @@ class Trajectory:
         else:
             s.append(sample)
 
+    def extend(self, samples: list[Sample]) -> None:
+        """Samples in strictly increasing time (a run of MC cycles), the first one as `add` takes it."""
+        if samples:
+            self.add(samples[0])
+            self.samples.extend(samples[1:] if len(samples) > 1 else ())
+
     def clear(self) -> None:
         self.samples.clear()
 
