@@ -91,8 +91,8 @@ class Prepared:
 def add_run_arguments(p, *, timings_default: str) -> None:
     """The arguments `commission` and `motion` share."""
     p.add_argument("file", metavar="FILE.pvl", help="the PVL file (LinMot-Talk export)")
-    p.add_argument("--axes", type=int_range(1, 8), default=None, metavar="N",
-                   help="number of drives, 1..8 (default 1)")
+    p.add_argument("--axes", type=int_range(1, 32), default=None, metavar="N",
+                   help="number of drives, 1..32 on the one bus (default 1, or as many as --node-ids)")
     p.add_argument("--node-ids", type=_node_ids, default=None, metavar="IDS",
                    help="their CANopen node IDs, comma-separated (default 1..N)")
     p.add_argument("--bus", default="sim", metavar="BUS",

@@ -20,7 +20,7 @@ from linmot_st import resources
 REPO = resources.CHECKOUT              # examples/ and build/ of a source checkout
 INSTANCE = "CONFIG0.RES0.MAIN"         # the program instance (plc_project/config.st)
 MAILBOX = "CONFIG0.RES0.CAN0"
-MAX_AXES = 8                           # FB_PlcAxis instances A1..A8 in plc_project/commission.st
+MAX_AXES = 32                          # FB_PlcAxis instances A1..A32 in plc_project/commission.st
 
 
 @dataclass
