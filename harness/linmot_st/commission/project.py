@@ -31,15 +31,17 @@ class Project:
     root: Path | None = None           # the include root, when it is not the entry's library tree
 
 
-def prepare(pvl, source_name: str | None = None) -> Project:
-    """Write (if needed) the entry file commissioning `pvl`. Raises DatasetError when it does not fit."""
+def prepare(pvl, source_name: str | None = None, *, text: str | None = None) -> Project:
+    """Write (if needed) the entry file commissioning `pvl`, or the dataset file `text` (datasets.py: per-node
+    datasets). Raises DatasetError when it does not fit."""
     from linmot_st.pvl.to_st import to_st
 
     tree = resources.library_tree()
     plc_project = tree / "plc_project"
     if not (plc_project / "commission.st").exists():
         raise FileNotFoundError(f"{plc_project}/commission.st not found: reinstall linmot-st")
-    text = to_st(pvl, source_name=source_name)
+    if text is None:
+        text = to_st(pvl, source_name=source_name)
     committed = plc_project / "dataset.st"
     if committed.exists() and committed.read_text() == text:
         return Project(plc_project / "plc.st", text, True)

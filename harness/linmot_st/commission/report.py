@@ -91,7 +91,12 @@ class Report:
     # ------------------------------------------------------------------ figures
     def compute(self) -> dict:
         r, bit = self.run, self.run.bit_ns
-        self.read_backs = {c.curve_id: curve_read_backs(r, c) for c in self.pvl.curves}
+        sets = r.datasets
+        own = None if sets is None or sets.single else {ax.node_id for ax in r.axes if sets.of(ax.node_id) is sets.default}
+        self.read_backs = {c.curve_id: curve_read_backs(r, c, own) for c in self.pvl.curves}
+
+        def dataset_of(node: int) -> Dataset:
+            return self.dataset if own is None or node in own else sets.of(node).dataset
         axes = []
         for ax in r.axes:
             on_bus = _bus_exchanges(r.trace, ax.node_id, ax.started_ns, ax.ended_ns or r.t_end_ns)
@@ -107,6 +112,7 @@ class Report:
             t_ex = sum(p.exchanges for p in transfer)
             axes.append(dict(
                 axis=ax.axis, node=ax.node_id,
+                dataset=(self.ctx.pvl_path if own is None or ax.node_id in own else sets.of(ax.node_id).name),
                 result="done" if ax.done else ("error" if ax.error else "not finished"),
                 error_id=ax.error_id, error=describe(ax.error_id, ax.abort_code) if ax.error else "",
                 abort_code=ax.abort_code, failure=self.failure_text(ax) if ax.error else "",
@@ -127,14 +133,15 @@ class Report:
         complete = r.commissioned
         # all axes on the one bus: the bound counts the necessary exchanges of every axis (a failed run has
         # no necessary count: its bound counts what it did)
-        need = necessary_exchanges(self.dataset, r.options) * len(r.axes) if complete else None
+        need = sum(necessary_exchanges(dataset_of(a.node_id), r.options) for a in r.axes) if complete else None
         lb_actual = lower_bound_ns(total_ex, bit)
         lb = lower_bound_ns(need, bit) if need is not None else None
         windows = _merge([(p.t0_ns, p.t1_ns) for ax in r.axes for p in ax.phases if p.phase in TRANSFER_PHASES])
         tr_ns = sum(b - a for a, b in windows)
         tr_busy = sum(self._busy_ns(a, b) for a, b in windows)
         tr_ex = sum(a["transfer"]["exchanges"] for a in axes)
-        tr_need = necessary_exchanges(self.dataset, r.options, transfer_only=True) * len(r.axes) if complete else None
+        tr_need = (sum(necessary_exchanges(dataset_of(a.node_id), r.options, transfer_only=True) for a in r.axes)
+                   if complete else None)
         tr_lb_actual = lower_bound_ns(tr_ex, bit)
         tr_lb = lower_bound_ns(tr_need, bit) if tr_need is not None else None
         tr_stuffed = stuffed_bound_ns(r, TRANSFER_PHASES, tr_need)
@@ -278,8 +285,12 @@ class Report:
             + (f", drive timings {o['drive_timings']}" if o["drive_timings"] else ""),
             "",
         ]
+        mixed = len({a["dataset"] for a in f["axes"]}) > 1
+        if mixed:
+            lines.insert(-1, "  per-node datasets: " + ", ".join(
+                f"node {a['node']} {a['dataset']}" for a in f["axes"]) + " (the dataset line: the first file's)")
         for a in f["axes"]:
-            head = f"node {a['node']}: "
+            head = f"node {a['node']}: " + (f"[{a['dataset']}] " if mixed else "")
             if a["result"] == "done":
                 head += f"commissioned in {a['time_ms']:.1f} ms, {_n(a['exchanges'], 'exchange')}"
             elif a["result"] == "error":
