@@ -37,11 +37,11 @@ class Datasets:
     def build(cls, pvl, name: str, per_node: dict[int, tuple[object, str]] | None = None) -> "Datasets":
         """`per_node`: node -> (pvl, name). Raises DatasetError when a dataset does not fit the format."""
         default = _source(pvl, name)
-        sources = {default.text: default}
+        sources = {_words(default): default}
         chosen = {}
         for node, (p, n) in sorted((per_node or {}).items()):
             s = _source(p, n)
-            s = sources.setdefault(s.text, s)               # the same content: the same words in T_PvlData
+            s = sources.setdefault(_words(s), s)            # the same content: the same words in T_PvlData
             if s is not default:
                 chosen[node] = s
         base = 1
@@ -93,6 +93,10 @@ class Datasets:
         body[-1] = last[:last.index(",  (*")] + last[last.index(",  (*") + 1:] if ",  (*" in last else last[:-1]
         return "\n".join(head + ["TYPE", f"  {DEFAULT_TYPE} : ARRAY[1..{len(words)}] OF DWORD := [", *body,
                                  "  ];", "END_TYPE", ""])
+
+
+def _words(s: Source) -> tuple[int, ...]:
+    return tuple(read_st(s.text)[1])
 
 
 def _source(pvl, name: str) -> Source:

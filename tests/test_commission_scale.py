@@ -1,0 +1,102 @@
+"""32 drives on one bus (issue 12): plc_project commissions them all, with one dataset and with a dataset per
+node, verified by reading back each emulated drive; the per-axis report; the CLI's --pvl errors.
+
+The datasets are the example without its curves (parameters and command table only), so that a 32-axis run
+stays short (docs/commissioning.md, "Tests")."""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+
+import pytest
+
+from linmot_st.cli import main
+from linmot_st.commission.datasets import Datasets
+from linmot_st.commission.project import build_project, prepare
+from linmot_st.commission.report import Context, Report
+from linmot_st.commission.runner import RunOptions, run
+from linmot_st.commission.testing import EXAMPLE, example
+from linmot_st.commission.verify import verify_run
+from linmot_st.pvl.to_st import to_st
+
+NODES = list(range(1, 33))
+
+
+def without_curves(pvl, keep_entries: bool = True):
+    drop = set(map(id, pvl.curves)) | (set() if keep_entries else set(map(id, pvl.command_table)))
+    return dataclasses.replace(pvl, objects=tuple(o for o in pvl.objects if id(o) not in drop))
+
+
+def commission_all(datasets: Datasets, nodes=NODES, bitrate=1_000_000):
+    project = prepare(datasets.default.pvl, datasets.default.name, text=datasets.st_text())
+    res = build_project(project)
+    opts = RunOptions(axes=len(nodes), node_ids=nodes, bitrate=bitrate, timings="fast", reset=False)
+    t0 = time.perf_counter()
+    result = run(datasets.default.pvl, opts, res, datasets=datasets)
+    wall = time.perf_counter() - t0
+    verification = verify_run(datasets.default.pvl, result)
+    ctx = Context(datasets.default.name, "test", res.backend, 0.0, True, "plc_project/plc.st",
+                  datasets.default.dataset.words)
+    report = Report(ctx, result, datasets.default.dataset, verification, datasets.default.pvl)
+    report.compute()
+    return result, verification, report, wall
+
+
+def test_32_axes_one_dataset():
+    pvl = without_curves(example())
+    result, verification, report, wall = commission_all(Datasets.build(pvl, "no_curves.pvl"))
+    assert [a.node_id for a in result.axes] == NODES and all(a.done for a in result.axes)
+    assert verification.ok and {c.node for c in verification.checks} == set(NODES)
+    f = report.figures
+    assert len(f["axes"]) == 32 and all(a["result"] == "done" for a in f["axes"])
+    tr = f["transfer"]
+    # both bounds are printed; the stuffed one (exact bits) is longer than the unstuffed one
+    assert tr["lower_bound_stuffed_ms"] > tr["lower_bound_ms"] > 0
+    text = report.text()
+    assert "stuffed bound" in text and text.count("commissioned in") == 32
+    assert wall < 30
+
+
+def test_32_axes_two_datasets_each_drive_holds_its_own():
+    a = without_curves(example())
+    b = without_curves(example(), keep_entries=False)          # another dataset: no command table
+    datasets = Datasets.build(a, "a.pvl", {n: (b, "b.pvl") for n in NODES if n % 2 == 0})
+    assert [s.base for s in datasets.sources] == [1, datasets.default.dataset.words + 1]
+    result, verification, report, _ = commission_all(datasets)
+    assert all(ax.done for ax in result.axes) and verification.ok
+    axes = {x["node"]: x for x in report.figures["axes"]}
+    assert axes[1]["dataset"] == "a.pvl" and axes[2]["dataset"] == "b.pvl"
+    assert "per-node datasets" in report.text()
+
+
+def test_same_content_is_laid_out_once():
+    pvl = without_curves(example())
+    d = Datasets.build(pvl, "a.pvl", {3: (pvl, "copy.pvl")})
+    assert d.single and d.st_text() == to_st(pvl, source_name="a.pvl")
+
+
+@pytest.mark.parametrize("extra, message", [
+    (["--pvl", "3"], "NODE=FILE.pvl"),
+    (["--pvl", "x=a.pvl"], "NODE=FILE.pvl"),
+    (["--pvl", "200=a.pvl"], "node ID 1..127"),
+    (["--axes", "2", "--pvl", "5=" + str(EXAMPLE)], "node 5 is not commissioned"),
+    (["--axes", "2", "--pvl", "2=" + str(EXAMPLE), "--pvl", "2=" + str(EXAMPLE)], "node 2 given twice"),
+])
+def test_pvl_option_errors(extra, message, capsys):
+    try:
+        status = main(["commission", str(EXAMPLE), "-q", *extra])
+    except SystemExit as e:
+        status = e.code
+    assert status == 2
+    assert message in capsys.readouterr().err
+
+
+def test_pvl_option_missing_file(tmp_path, capsys):
+    assert main(["commission", str(EXAMPLE), "-q", "--axes", "2", "--pvl", f"2={tmp_path / 'none.pvl'}"]) == 1
+    assert "none.pvl" in capsys.readouterr().err
+
+
+def test_motion_refuses_per_node_datasets(capsys):
+    assert main(["motion", str(EXAMPLE), "-q", "--axes", "2", "--pvl", f"2={EXAMPLE}"]) == 2
+    assert "--pvl" in capsys.readouterr().err
