@@ -38,6 +38,18 @@ def _node_pvl(text: str) -> tuple[int, str]:
     return n, path
 
 
+def _task_interval(text: str) -> int:
+    from .project import parse_task_interval
+    try:
+        return parse_task_interval(text)
+    except ValueError as e:
+        raise argparse.ArgumentTypeError(str(e)) from None
+
+
+def _duration(ns: int) -> str:
+    return f"{ns // 1_000_000}ms" if ns % 1_000_000 == 0 else f"{ns // 1_000}us"
+
+
 def register(subparsers) -> None:
     p = subparsers.add_parser(
         "commission", help="commission emulated E1100 drives from a PVL file with the PLC, and report",
@@ -56,6 +68,9 @@ def register(subparsers) -> None:
                    help="the PLC reads everything back (default on)")
     p.add_argument("--no-emulate", dest="emulate", action="store_false",
                    help="real drives on a real bus: no emulated drives, no memory verification")
+    p.add_argument("--task-interval", type=_task_interval, default=None, metavar="DURATION",
+                   help="the PLC task's interval, built into the program, 50us..10ms (default 1ms; 250us keeps "
+                        "the bus busy for few drives at 1 Mbit/s: docs/commissioning.md, \"Task interval\")")
     p.set_defaults(func=run_command)
 
 
@@ -75,6 +90,8 @@ def command_line(args: argparse.Namespace) -> str:
         parts += ["--pvl", f"{node}={path}"]
     if args.curve_memory is not None:
         parts += ["--curve-memory", str(args.curve_memory)]
+    if getattr(args, "task_interval", None) is not None:
+        parts += ["--task-interval", _duration(args.task_interval)]
     for name, default in (("live_ram", False), ("flash", True), ("reset", True), ("verify", True),
                           ("preflight", True)):
         if getattr(args, name) != default:
@@ -147,7 +164,7 @@ def prepare_run(args: argparse.Namespace, *, flash: bool = True, reset: bool = T
 
     from linmot_st.pvl.dataset import DatasetError, from_pvl
     from .datasets import Datasets
-    from .project import build_project, prepare
+    from .project import TASK_INTERVAL_NS, build_project, prepare
     from .runner import RunOptions, check_bus_spec
 
     err = sys.stderr
@@ -192,7 +209,8 @@ def prepare_run(args: argparse.Namespace, *, flash: bool = True, reset: bool = T
     try:
         datasets = Datasets.build(pvl, Path(args.file).name, per_node)
         dataset = datasets.default.dataset
-        project = prepare(pvl, Path(args.file).name, text=datasets.st_text())
+        project = prepare(pvl, Path(args.file).name, text=datasets.st_text(),
+                          task_interval_ns=getattr(args, "task_interval", None) or TASK_INTERVAL_NS)
     except (DatasetError, FileNotFoundError) as e:
         error(args, str(e))
         return 1

@@ -252,11 +252,16 @@ class Sampler:
         return phase_name(vs["phase"].value), vs["items"].value, vs["total"].value
 
 
+def node_id_table(nodes: list[int]) -> list[int]:
+    """plc_project's NodeIds[1..MAX_AXES] for these axes' node IDs (the rest 0: no axis)."""
+    return list(nodes) + [0] * (MAX_AXES - len(nodes))
+
+
 def _configure(plc, opts: RunOptions, nodes: list[int], curve_memory: int = 0, bases: list[int] | None = None
                ) -> None:
     p = INSTANCE
     plc[f"{p}.AXES"] = len(nodes)
-    plc[f"{p}.NODEIDS"] = nodes + [0] * (MAX_AXES - len(nodes))
+    plc[f"{p}.NODEIDS"] = node_id_table(nodes)
     plc[f"{p}.DATABASES"] = (bases or [1] * len(nodes)) + [1] * (MAX_AXES - len(nodes))
     plc[f"{p}.WAITBOOT"] = opts.emulate            # emulated drives are switched on with the PLC
     plc[f"{p}.LIVERAM"] = opts.live_ram
