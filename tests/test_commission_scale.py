@@ -67,7 +67,33 @@ def test_32_axes_two_datasets_each_drive_holds_its_own():
     assert all(ax.done for ax in result.axes) and verification.ok
     axes = {x["node"]: x for x in report.figures["axes"]}
     assert axes[1]["dataset"] == "a.pvl" and axes[2]["dataset"] == "b.pvl"
-    assert "per-node datasets" in report.text()
+    # one dataset line per file, with its nodes and its own counts
+    sets = {d["name"]: d for d in report.figures["datasets"]}
+    assert sets["a.pvl"]["nodes"] == NODES[0::2] and sets["b.pvl"]["nodes"] == NODES[1::2]
+    assert sets["a.pvl"]["entries"] == len(a.command_table) > 0 == sets["b.pvl"]["entries"]
+    text = report.text()
+    assert "  dataset a.pvl (nodes 1, 3, 5," in text and "  dataset b.pvl (nodes 2, 4, 6," in text
+
+
+def only_curves(pvl, ids):
+    drop = {id(c) for c in pvl.curves if c.curve_id not in ids}
+    return dataclasses.replace(pvl, objects=tuple(o for o in pvl.objects if id(o) not in drop))
+
+
+def test_per_node_datasets_report_and_plot_every_files_curves(tmp_path):
+    """Node 1 gets the example, node 2 another file with one of its curves: the read-back and the plots of
+    each file's curves are those of its own nodes."""
+    b = only_curves(example(), {23})
+    datasets = Datasets.build(example(), "a.pvl", {2: (b, "b.pvl")})
+    result, verification, report, _ = commission_all(datasets, nodes=[1, 2])
+    assert all(ax.done for ax in result.axes) and verification.ok
+    curves = [(c["dataset"], c["curve"], [n["node"] for n in c["nodes"]]) for c in report.figures["curves"]]
+    assert curves == [("a.pvl", 23, [1]), ("a.pvl", 1, [1]), ("a.pvl", 2, [1]), ("b.pvl", 23, [2])]
+    assert all(n["verdict"] == "read back = written" for c in report.figures["curves"] for n in c["nodes"])
+    assert "[b.pvl] curve 23 'Example_Curve'" in report.text()
+    files = report.write(tmp_path / "report")
+    assert files["plots"] == ["curve_23.png", "curve_1.png", "curve_2.png", "curve_23_dataset2.png"]
+    assert all((tmp_path / "report" / name).stat().st_size > 0 for name in files["plots"])
 
 
 def test_same_content_is_laid_out_once():

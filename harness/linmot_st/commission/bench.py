@@ -163,6 +163,7 @@ def run() -> list[dict]:
         plc["MAIN.AXES"] = axes
         plc["MAIN.START"] = True
         out.append(_fig(f"plc_project scan, {axes} axes idle ({res.backend})", _scan_us(plc), "us"))
+    out += memory_figures(res)
     # VAR_IN_OUT dataset vs the 2-word window, 8 FBs per scan, on each backend available
     from linmot_st.toolchain import builtin_available, matiec_available
     folder = Path(__file__).resolve().parents[3] / "build" / "bench" / "commission"
@@ -183,19 +184,63 @@ def run() -> list[dict]:
     return out + fault_matrix_figures(res)
 
 
-def bus_bound_figures(drives=(2, 8, 16, 32), bitrates=(500_000, 1_000_000)) -> list[dict]:
+BOUND_TASK = "250us"            # the task interval that meets the bus bound (docs/commissioning.md, "Task interval")
+
+
+class StepTimer:
+    """A prepare_plc hook: the wall time of the PLC's C steps during a run (the harness's bus and drives
+    excluded), per scan."""
+
+    def __init__(self):
+        self.seconds, self.scans = 0.0, 0
+
+    def __call__(self, plc):
+        step = plc.step
+
+        def timed(n=1):
+            t0 = time.perf_counter()
+            step(n)
+            self.seconds += time.perf_counter() - t0
+            self.scans += n
+        plc.step = timed
+
+    @property
+    def us_per_scan(self) -> float:
+        return self.seconds / max(self.scans, 1) * 1e6
+
+
+def memory_figures(res) -> list[dict]:
+    """plc_project's PLC memory: every variable of the compiled program (its instance and the mailbox)."""
+    from linmot_st.plc import Plc
+    plc = Plc(res)
+    total = sum(size for _, size in plc._root_spans)
+    return [_fig("plc_project PLC memory: program instance + mailbox (32 axes)", total / 1024, "KiB"),
+            _fig("plc_project PLC memory: one axis (FB_PlcAxis)", plc.layout.resolve("FB_PLCAXIS").size / 1024,
+                 "KiB")]
+
+
+def bus_bound_figures(drives=(2, 8, 16, 32), bitrates=(500_000, 1_000_000), task_interval=BOUND_TASK,
+                      scan_bound_drives=(2,)) -> list[dict]:
     """All axes' transfer phases against the stuffed bus bound (the necessary frames' exact bits, back to
-    back; report.stuffed_bound_ns) and the unstuffed one, N drives sharing one bus (issue 12). Write and
-    verify of examples/two_axes.pvl, fast drive timings: the transfer phases do not depend on them."""
+    back; report.stuffed_bound_ns) and the unstuffed one, N drives sharing one bus (issue 12), with the task
+    interval that meets the bound; and for scan_bound_drives also with plc_project's 1 ms task, where few
+    drives are scan-bound at 1 Mbit/s. Write and verify of examples/two_axes.pvl, fast drive timings: the
+    transfer phases do not depend on them."""
     out = []
-    for bitrate in bitrates:
-        for n in drives:
-            o, wall = _commission(n, bitrate=bitrate, flash=True, reset=False)
-            tr = o.report.figures["transfer"]
-            what = f"{n} drives, {bitrate // 1000} kbit/s: transfer phases"
-            out += [_fig(f"{what} / stuffed bus bound", tr["ratio_stuffed"], "x", "<= 1.05"),
-                    _fig(f"{what} / unstuffed bus bound", tr["ratio"], "x"),
-                    _fig(f"{what}: bus load; wall time of the run", f"{100 * tr['load']:.1f} %; {wall:.1f} s", "")]
+    runs = [(b, n, task_interval) for b in bitrates for n in drives]
+    runs += [(b, n, None) for b in bitrates for n in scan_bound_drives]
+    for bitrate, n, task in runs:
+        steps = StepTimer()
+        o, wall = _commission(n, bitrate=bitrate, flash=True, reset=False, task_interval=task, prepare_plc=steps)
+        tr = o.report.figures["transfer"]
+        what = f"{n} drives, {bitrate // 1000} kbit/s, {task or '1ms'} task: transfer phases"
+        out += [_fig(f"{what} / stuffed bus bound", tr["ratio_stuffed"], "x", "<= 1.05" if task else None),
+                _fig(f"{what} / unstuffed bus bound", tr["ratio"], "x"),
+                _fig(f"{what}: bus load", 100 * tr["load"], "%"),
+                _fig(f"{what}: wall time of the run", wall, "s")]
+        if n == max(drives):
+            out.append(_fig(f"{n} drives, {bitrate // 1000} kbit/s: plc_project scan while commissioning (C step, "
+                            f"mean of {steps.scans} scans)", steps.us_per_scan, "us"))
     return out
 
 

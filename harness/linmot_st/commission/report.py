@@ -79,6 +79,21 @@ class Context:
 
 
 @dataclass
+class DatasetGroup:
+    """One dataset file of a run and the axes commissioned with it."""
+    name: str
+    pvl: object
+    dataset: Dataset
+    nodes: list[int]
+    read_backs: dict[int, list[ReadBack]] = field(default_factory=dict)     # curve ID -> per axis
+
+
+def _dataset_counts(ds: Dataset) -> dict:
+    return dict(layers=len(ds.layers), parameters=len(ds.params), curves=len(ds.curves),
+                setpoints=sum(len(c[2]) for c in ds.curves), entries=len(ds.entries), words=ds.words)
+
+
+@dataclass
 class Report:
     ctx: Context
     run: RunResult
@@ -86,14 +101,14 @@ class Report:
     verification: Verification
     pvl: object
     figures: dict = field(default_factory=dict)
-    read_backs: dict[int, list[ReadBack]] = field(default_factory=dict)     # curve ID -> per axis
+    groups: list = field(default_factory=list)    # DatasetGroup per dataset file (one without per-node datasets)
 
     # ------------------------------------------------------------------ figures
     def compute(self) -> dict:
         r, bit = self.run, self.run.bit_ns
         sets = r.datasets
         own = None if sets is None or sets.single else {ax.node_id for ax in r.axes if sets.of(ax.node_id) is sets.default}
-        self.read_backs = {c.curve_id: curve_read_backs(r, c, own) for c in self.pvl.curves}
+        self.groups = self._dataset_groups(own)
 
         def dataset_of(node: int) -> Dataset:
             return self.dataset if own is None or node in own else sets.of(node).dataset
@@ -149,9 +164,8 @@ class Report:
         self.figures = dict(
             command=self.ctx.command, pvl=self.ctx.pvl_path, backend=self.ctx.backend,
             build=dict(seconds=round(self.ctx.build_s, 3), cached=self.ctx.build_cached, project=self.ctx.project),
-            dataset=dict(layers=len(self.dataset.layers), parameters=len(self.dataset.params),
-                         curves=len(self.dataset.curves), setpoints=sum(len(c[2]) for c in self.dataset.curves),
-                         entries=len(self.dataset.entries), words=self.dataset.words),
+            dataset=_dataset_counts(self.dataset),
+            datasets=[dict(name=g.name, nodes=g.nodes, **_dataset_counts(g.dataset)) for g in self.groups],
             options=dict(axes=len(r.axes), node_ids=r.node_ids, bus=r.options.bus, bitrate=r.options.bitrate,
                          live_ram=r.options.live_ram, flash=r.options.flash, reset=r.options.reset,
                          verify=r.options.verify, preflight=r.options.preflight,
@@ -177,11 +191,11 @@ class Report:
                           ratio_actual=tr_ns / tr_lb_actual if tr_lb_actual else None,
                           lower_bound_stuffed_ms=tr_stuffed / 1e6 if tr_stuffed else None,
                           ratio_stuffed=tr_ns / tr_stuffed if tr_stuffed else None),
-            curves=[dict(curve=cid, setpoints=len(c.setpoints),
+            curves=[dict(curve=c.curve_id, name=c.name, setpoints=len(c.setpoints), dataset=g.name,
                          nodes=[dict(node=rb.node, written=rb.written,
                                      read_back=len(rb.setpoints) if rb.setpoints else None, source=rb.source,
-                                     differ=rb.differ, verdict=rb.verdict) for rb in self.read_backs[cid]])
-                    for cid, c in ((c.curve_id, c) for c in self.pvl.curves)],
+                                     differ=rb.differ, verdict=rb.verdict) for rb in g.read_backs[c.curve_id]])
+                    for g in self.groups for c in g.pvl.curves],
             verification=dict(ok=self.verification.ok, skipped=self.verification.skipped,
                               by_plc=self.verification.by_plc,
                               checks=[dict(node=c.node, what=c.what, checked=c.checked, equal=c.equal,
@@ -191,6 +205,20 @@ class Report:
                         passed=r.commissioned and self.verification.ok),
         )
         return self.figures
+
+    def _dataset_groups(self, own: set[int] | None) -> list["DatasetGroup"]:
+        """The first file's group (its nodes: `own`, None = every axis), then one per other dataset file."""
+        r, sets = self.run, self.run.datasets
+        nodes = [ax.node_id for ax in r.axes]
+        first = [n for n in nodes if own is None or n in own]
+        groups = [DatasetGroup(self.ctx.pvl_path, self.pvl, self.dataset, first)]
+        for src in (sets.sources[1:] if own is not None else ()):
+            mine = [n for n in nodes if sets.of(n) is src]
+            groups.append(DatasetGroup(src.name, src.pvl, src.dataset, mine))
+        groups = [g for g in groups if g.nodes] or groups[:1]        # --pvl for every node: not the first file
+        for g in groups:
+            g.read_backs = {c.curve_id: curve_read_backs(r, c, set(g.nodes)) for c in g.pvl.curves}
+        return groups
 
     def _busy_ns(self, t0: int, t1: int) -> int:
         from linmot_st.bus.stats import bus_stats
@@ -270,7 +298,7 @@ class Report:
     # ------------------------------------------------------------------ text
     def text(self) -> str:
         f = self.figures or self.compute()
-        o, d, run, bus, tr = f["options"], f["dataset"], f["run"], f["bus"], f["transfer"]
+        o, run, bus, tr = f["options"], f["run"], f["bus"], f["transfer"]
         kbit = f"{o['bitrate'] / 1000:g} kbit/s"
         bus_name = ("simulated bus" if o["bus"] == "sim" else o["bus"]) + f" {kbit}"
         lines = [
@@ -278,17 +306,15 @@ class Report:
             f"  {_n(o['axes'], 'axis', 'axes')} (node ID{'s' if o['axes'] > 1 else ''} "
             f"{', '.join(map(str, o['node_ids']))}), {bus_name}, PLC task {o['task_ms']:g} ms, backend {f['backend']} "
             f"({self.ctx.project}, build {'cached' if f['build']['cached'] else f'{self.ctx.build_s:.1f} s'})",
-            f"  dataset: {_n(d['layers'], 'layer')}, {_n(d['parameters'], 'parameter')}, {_n(d['curves'], 'curve')} "
-            f"({_n(d['setpoints'], 'setpoint')}), {_n(d['entries'], 'command-table entry', 'command-table entries')}"
-            f" = {_n(d['words'], 'word')}",
+            *(f"  dataset{'' if len(f['datasets']) == 1 else ' ' + g['name'] + ' (nodes ' + ', '.join(map(str, g['nodes'])) + ')'}: "
+              f"{_n(g['layers'], 'layer')}, {_n(g['parameters'], 'parameter')}, {_n(g['curves'], 'curve')} "
+              f"({_n(g['setpoints'], 'setpoint')}), {_n(g['entries'], 'command-table entry', 'command-table entries')}"
+              f" = {_n(g['words'], 'word')}" for g in f["datasets"]),
             "  options: " + ", ".join(f"{k} {'on' if o[k] else 'off'}" for k in ("live_ram", "flash", "reset", "verify", "preflight"))
             + (f", drive timings {o['drive_timings']}" if o["drive_timings"] else ""),
             "",
         ]
-        mixed = len({a["dataset"] for a in f["axes"]}) > 1
-        if mixed:
-            lines.insert(-1, "  per-node datasets: " + ", ".join(
-                f"node {a['node']} {a['dataset']}" for a in f["axes"]) + " (the dataset line: the first file's)")
+        mixed = len(f["datasets"]) > 1
         for a in f["axes"]:
             head = f"node {a['node']}: " + (f"[{a['dataset']}] " if mixed else "")
             if a["result"] == "done":
@@ -362,10 +388,10 @@ class Report:
         if f["curves"]:
             lines += ["", "curves read back (the PLC's VERIFY on the bus; else the emulated drive's RAM):"]
             for c in f["curves"]:
-                cv = self.pvl.curve(c["curve"])
                 parts = [f"node {n['node']} {n['verdict']}"
                          + (f" ({n['source']})" if n["source"] and n["source"] != "bus" else "") for n in c["nodes"]]
-                lines.append(f"  curve {c['curve']} '{cv.name}', {_n(c['setpoints'], 'setpoint')}: " + "; ".join(parts))
+                lines.append(f"  {'[' + c['dataset'] + '] ' if mixed else ''}curve {c['curve']} '{c['name']}', "
+                             f"{_n(c['setpoints'], 'setpoint')}: " + "; ".join(parts))
         v = self.verification
         lines += ["", "verification (the emulated drives' memory against the PVL file):" if not v.by_plc
                   else "verification:"]
@@ -438,10 +464,12 @@ class Report:
         trace_name = f"can.{trace_format.lstrip('.')}"
         write_trace(self.run.trace, folder / trace_name)
         files["trace"] = trace_name
-        for c in self.pvl.curves:
-            name = f"curve_{c.curve_id}.png"
-            plot_curve(folder / name, c, self.read_backs[c.curve_id])
-            files["plots"].append(name)
+        for k, g in enumerate(self.groups):
+            for c in g.pvl.curves:
+                # the first file's curves keep their plain names; another file's carry its number
+                name = f"curve_{c.curve_id}.png" if k == 0 else f"curve_{c.curve_id}_dataset{k + 1}.png"
+                plot_curve(folder / name, c, g.read_backs[c.curve_id])
+                files["plots"].append(name)
         files["json"] = "report.json"
         f["files"] = files
         (folder / "report.json").write_text(json.dumps(f, indent=2, default=_json_default) + "\n")
