@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
+import types
 
 import pytest
 
@@ -75,22 +76,29 @@ def test_32_axes_two_datasets_each_drive_holds_its_own():
     assert "  dataset a.pvl (nodes 1, 3, 5," in text and "  dataset b.pvl (nodes 2, 4, 6," in text
 
 
-def only_curves(pvl, ids):
-    drop = {id(c) for c in pvl.curves if c.curve_id not in ids}
-    return dataclasses.replace(pvl, objects=tuple(o for o in pvl.objects if id(o) not in drop))
+def only_curves(pvl, ids, rename: str = ""):
+    """`pvl` with only the curves `ids`, renamed `rename` (when given)."""
+    keep = [o for o in pvl.objects if o not in pvl.curves or o.curve_id in ids]
+    return dataclasses.replace(pvl, objects=tuple(
+        dataclasses.replace(o, info_block=dataclasses.replace(o.info, name=rename).to_bytes())
+        if rename and o in pvl.curves else o for o in keep))
 
 
 def test_per_node_datasets_report_and_plot_every_files_curves(tmp_path):
     """Node 1 gets the example, node 2 another file with one of its curves: the read-back and the plots of
     each file's curves are those of its own nodes."""
-    b = only_curves(example(), {23})
+    b = only_curves(example(), {23}, rename="Only_B")
     datasets = Datasets.build(example(), "a.pvl", {2: (b, "b.pvl")})
     result, verification, report, _ = commission_all(datasets, nodes=[1, 2])
     assert all(ax.done for ax in result.axes) and verification.ok
     curves = [(c["dataset"], c["curve"], [n["node"] for n in c["nodes"]]) for c in report.figures["curves"]]
     assert curves == [("a.pvl", 23, [1]), ("a.pvl", 1, [1]), ("a.pvl", 2, [1]), ("b.pvl", 23, [2])]
     assert all(n["verdict"] == "read back = written" for c in report.figures["curves"] for n in c["nodes"])
-    assert "[b.pvl] curve 23 'Example_Curve'" in report.text()
+    assert "[b.pvl] curve 23 'Only_B'" in report.text() and "[a.pvl] curve 23 'Example_Curve'" in report.text()
+    # a failure is told in the words of the axis' own file
+    failed = types.SimpleNamespace(fail_kind="curve", fail_item=23, fail_step=0, fail_phase="verify")
+    assert "'Only_B'" in report.item_text(types.SimpleNamespace(node_id=2, **vars(failed)))
+    assert "'Example_Curve'" in report.item_text(types.SimpleNamespace(node_id=1, **vars(failed)))
     files = report.write(tmp_path / "report")
     assert files["plots"] == ["curve_23.png", "curve_1.png", "curve_2.png", "curve_23_dataset2.png"]
     assert all((tmp_path / "report" / name).stat().st_size > 0 for name in files["plots"])

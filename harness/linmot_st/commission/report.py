@@ -225,12 +225,17 @@ class Report:
         return bus_stats(self.run.trace, self.run.bit_ns, t0, t1).busy_ns
 
     # ------------------------------------------------------------------ words
+    def _group_of(self, node: int) -> "DatasetGroup":
+        """The dataset file this axis was commissioned with (its captions and curve names)."""
+        return next((g for g in self.groups if node in g.nodes), None) or DatasetGroup(
+            self.ctx.pvl_path, self.pvl, self.dataset, [])
+
     def failure_text(self, ax) -> str:
         where = self.item_text(ax)
         what = describe(ax.error_id, ax.abort_code)
         extra = ""
         if ax.fail_kind == "layer" and ax.error_id in (0x0501, 0x0502, 0x0503):
-            src = next((l for l in self.dataset.layers if l[0] == ax.fail_item), None)
+            src = next((l for l in self._group_of(ax.node_id).dataset.layers if l[0] == ax.fail_item), None)
             tid, main, sub = ax.drive_layer
             if src:
                 extra = (f"; the drive has tree ID {tid}, version {main}.{sub}, the dataset tree ID {src[1]}, "
@@ -260,10 +265,11 @@ class Report:
             from linmot_st.pvl import LAYERS
             return f"layer {item} ({LAYERS[item].name})" if item in LAYERS else f"layer {item}"
         if kind == "param":
-            caption = next((p.caption for o in self.pvl.parameter_objects for p in o.parameters if p.upid == item), "")
+            caption = next((p.caption for o in self._group_of(ax.node_id).pvl.parameter_objects for p in o.parameters
+                            if p.upid == item), "")
             return f"UPID {item:04X}h {caption}".rstrip()
         if kind == "curve":
-            c = self.pvl.curve(item)
+            c = self._group_of(ax.node_id).pvl.curve(item)
             name = f" '{c.name}'" if c else ""
             if step == 0:
                 part = "get request (60h)" if verifying else self._first_request(ax, {
