@@ -32,7 +32,8 @@ def without_curves(pvl, keep_entries: bool = True):
 def commission_all(datasets: Datasets, nodes=NODES, bitrate=1_000_000):
     project = prepare(datasets.default.pvl, datasets.default.name, text=datasets.st_text())
     res = build_project(project)
-    opts = RunOptions(axes=len(nodes), node_ids=nodes, bitrate=bitrate, timings="fast", reset=False)
+    # the full write (Force): the bounds are those of the necessary exchanges of a full write (report.py)
+    opts = RunOptions(axes=len(nodes), node_ids=nodes, bitrate=bitrate, timings="fast", reset=False, force=True)
     t0 = time.perf_counter()
     result = run(datasets.default.pvl, opts, res, datasets=datasets)
     wall = time.perf_counter() - t0

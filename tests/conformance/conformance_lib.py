@@ -8,6 +8,10 @@ Each case is one file under cases/, an ST text whose first comment says what mus
       matiec-defect: spec/matiec.md 7.1 ...  MatIEC HEAD gets this case wrong, for this reason;
       matiec-expect 1: N = 0; I = 5          ... and gives these values instead (left out of the
                                              differential comparison)
+      matiec-expect[head] 1: N = 0           ... only under an iec2c with these FOR semantics
+                                             (toolchain/for_semantics.py: head, openplc, fixed, other)
+      matiec-fault[openplc] 1: kind 5        ... under such an iec2c, scan 1 ends in this PLC fault (5:
+                                             the scan watchdog, for a loop that never ends); run alone
       interval: T#10ms                       the task interval (default T#10ms)
       reject 7:12: type mismatch             the builtin compiler rejects it, first diagnostic at line 7,
                                              column 12 (`reject 7:` checks the line only), message containing...
@@ -34,7 +38,9 @@ CASES_DIR = Path(__file__).parent / "cases"
 DEFAULT_INTERVAL = "T#10ms"
 
 _HEADER = re.compile(r"\A\s*\(\*(.*?)\*\)", re.S)
-_LINE = re.compile(r"^\s*([a-z-]+)(?:\s+(\d+))?\s*:\s*(.*?)\s*$")
+_LINE = re.compile(r"^\s*([a-z-]+)(?:\[([a-z, ]+)\])?(?:\s+(\d+))?\s*:\s*(.*?)\s*$")
+ALL_VARIANTS = "*"
+FOR_VARIANTS = {"head", "openplc", "fixed", "other"}     # ForSemantics.name
 
 
 @dataclass
@@ -44,7 +50,9 @@ class Case:
     text: str
     title: str = ""
     expects: dict[int, dict[str, object]] = field(default_factory=dict)
-    matiec_expects: dict[int, dict[str, object]] = field(default_factory=dict)
+    # expectations on the matiec backend: for every iec2c ("*"), or for one FOR variant
+    matiec_by_variant: dict[str, dict[int, dict[str, object]]] = field(default_factory=dict)
+    matiec_faults: dict[str, tuple[int, int]] = field(default_factory=dict)     # variant -> (scan, kind)
     matiec_defect: str = ""
     interval: str = DEFAULT_INTERVAL
     reject: str | None = None
@@ -75,16 +83,32 @@ class Case:
             return rel
         return f"CONF.RES.{self.instance}.{rel}"
 
-    def expected(self, backend: str) -> dict[int, dict[str, object]]:
-        if backend != "matiec" or not self.matiec_expects:
-            return self.expects
-        out = {k: dict(v) for k, v in self.expects.items()}
-        for scans, values in self.matiec_expects.items():
-            out.setdefault(scans, {}).update(values)
+    @property
+    def matiec_expects(self) -> dict[int, dict[str, object]]:
+        """Every value a matiec expectation names, under any variant (what a run must record)."""
+        out: dict[int, dict[str, object]] = {}
+        for by_scan in self.matiec_by_variant.values():
+            for scans, values in by_scan.items():
+                out.setdefault(scans, {}).update(values)
         return out
 
-    def excluded_from_diff(self) -> set[str]:
-        return {p.upper() for values in self.matiec_expects.values() for p in values}
+    def _matiec_for(self, variant: str | None) -> list[dict[int, dict[str, object]]]:
+        return [self.matiec_by_variant[v] for v in (ALL_VARIANTS, variant) if v in self.matiec_by_variant]
+
+    def expected(self, backend: str, variant: str | None = None) -> dict[int, dict[str, object]]:
+        if backend != "matiec":
+            return self.expects
+        out = {k: dict(v) for k, v in self.expects.items()}
+        for by_scan in self._matiec_for(variant):
+            for scans, values in by_scan.items():
+                out.setdefault(scans, {}).update(values)
+        return out
+
+    def matiec_fault(self, variant: str | None) -> tuple[int, int] | None:
+        return self.matiec_faults.get(variant) or self.matiec_faults.get(ALL_VARIANTS)
+
+    def excluded_from_diff(self, variant: str | None = None) -> set[str]:
+        return {p.upper() for by_scan in self._matiec_for(variant) for values in by_scan.values() for p in values}
 
 
 def parse_value(text: str):
@@ -142,14 +166,25 @@ def load_case(path: Path) -> Case:
         lm = _LINE.match(raw)
         if not lm:
             raise ValueError(f"{path}: cannot read header line {raw!r}")
-        key, num, rest = lm.group(1), lm.group(2), lm.group(3)
+        key, tags, num, rest = lm.group(1), lm.group(2), lm.group(3), lm.group(4)
         where = f"{path.name}: {key}"
+        variants = [t.strip() for t in tags.split(",")] if tags else [ALL_VARIANTS]
+        if tags and (key not in ("matiec-expect", "matiec-fault") or not set(variants) <= FOR_VARIANTS):
+            raise ValueError(f"{where}: [variant] tags are {sorted(FOR_VARIANTS)}, on matiec-expect and "
+                             f"matiec-fault only")
         if key == "title":
             case.title = rest
         elif key == "expect":
             case.expects.setdefault(int(num), {}).update(_assignments(rest, where))
         elif key == "matiec-expect":
-            case.matiec_expects.setdefault(int(num), {}).update(_assignments(rest, where))
+            for v in variants:
+                case.matiec_by_variant.setdefault(v, {}).setdefault(int(num), {}).update(_assignments(rest, where))
+        elif key == "matiec-fault":
+            fm = re.fullmatch(r"kind\s+(\d+)", rest)
+            if not fm or not num:
+                raise ValueError(f"{where}: write `matiec-fault[VARIANT] SCAN: kind K`")
+            for v in variants:
+                case.matiec_faults[v] = (int(num), int(fm.group(1)))
         elif key == "matiec-defect":
             case.matiec_defect = rest
         elif key == "interval":
@@ -168,7 +203,7 @@ def load_case(path: Path) -> Case:
             case.fault = (int(num), int(fm.group(1)), int(fm.group(2)) if fm.group(2) else None)
         else:
             raise ValueError(f"{path}: unknown header key {key!r}")
-    if case.matiec_expects and not case.matiec_defect:
+    if (case.matiec_by_variant or case.matiec_faults) and not case.matiec_defect:
         raise ValueError(f"{path}: matiec-expect needs a matiec-defect line saying why")
     case.own_config = re.search(r"(?im)^\s*CONFIGURATION\b", _strip_comments(text)) is not None
     if case.kind == "run" and not case.expects:

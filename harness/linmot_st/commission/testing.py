@@ -53,8 +53,9 @@ class Outcome:
 
 def commission(backend: str = "auto", pvl=None, **kw) -> Outcome:
     """Run the commissioning of `pvl` (default the example) and verify it. Keyword arguments: RunOptions
-    fields (timings default "fast", reset default False), task_interval (project_build), and run()'s hooks
-    drive_factory, prepare_bus, prepare_plc."""
+    fields (timings default "fast", reset default False, force default True: the full write, whose exchanges
+    the tests count; the re-commissioning tests pass force=False), task_interval (project_build), and run()'s
+    hooks drive_factory, prepare_bus, prepare_plc."""
     from linmot_st.pvl.dataset import from_pvl
     from .report import Context, Report
     from .runner import RunOptions, run
@@ -64,6 +65,7 @@ def commission(backend: str = "auto", pvl=None, **kw) -> Outcome:
     hooks = {k: kw.pop(k) for k in ("drive_factory", "prepare_bus", "prepare_plc", "progress") if k in kw}
     kw.setdefault("timings", "fast")
     kw.setdefault("reset", False)
+    kw.setdefault("force", True)
     task_interval = kw.pop("task_interval", None)
     opts = RunOptions(**kw)
     res = project_build(backend, task_interval)

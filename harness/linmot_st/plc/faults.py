@@ -12,6 +12,10 @@ FAULT_KINDS = {
     3: "arithmetic fault",
     4: "fatal signal",
     5: "scan watchdog: the scan ran longer than the watchdog allows",
+    # operations whose value MatIEC's C leaves undefined: stopped rather than given a value of our own
+    6: "SHL/SHR/ROL/ROR count that MatIEC's C leaves undefined (below 0, at or beyond the width it shifts in)",
+    7: ("REAL/LREAL to integer conversion that MatIEC's C leaves undefined (inf, NaN or out of range; also "
+        "inside its TIME * x, TIME / x and REAL_TO_TIME, which convert seconds and nanoseconds from double)"),
 }
 
 

@@ -184,6 +184,11 @@ def _compile(chosen: str, tool, src: _sources.Sources, store: _cache.Cache, key:
             if not trap_flags_supported():
                 manifest.setdefault("warnings", []).append(
                     "array indices are not checked: the C compiler has no trapping bounds sanitizer")
+            elif not cc.checks_undefined_values():
+                manifest.setdefault("warnings", []).append(
+                    "shift counts and REAL -> integer conversions are not checked: the C compiler has no "
+                    "UBSan shift-exponent/float-cast-overflow checks; where MatIEC's C leaves them undefined "
+                    "the values are the C compiler's")
         else:
             manifest, all_units, read = _builtin_generate(src, c_dir)
             unit_flags, include_dirs = {}, [c_dir]
@@ -238,11 +243,19 @@ def _internal(exc: BaseException, backend: str, src: _sources.Sources) -> Intern
         backend)
 
 
-_MISSING_WRAPPER = re.compile(r"implicit declaration of function .__\w+?\d+.")
+# a global's accessor (__GET_GLOBAL_X, declared by the CONFIGURATION's VAR_GLOBAL X) is no call wrapper
+_MISSING_GLOBAL = re.compile(r"implicit declaration of function .__GET_GLOBAL_(\w+).")
+_MISSING_WRAPPER = re.compile(r"implicit declaration of function .__(?!GET_GLOBAL_)\w+?\d+.")
 
 
 def _explain_matiec_c_errors(diags: list[str]) -> list[str]:
     """Add what is known about MatIEC defects that surface as C errors."""
+    missing = sorted({m[1] for d in diags for m in [_MISSING_GLOBAL.search(d)] if m})
+    if missing:
+        diags = diags + [
+            f"note: no VAR_GLOBAL {', '.join(missing)} in the CONFIGURATION (or no CONFIGURATION at all) for a "
+            "VAR_EXTERNAL of that name: iec2c accepts such a VAR_EXTERNAL, but its C then calls __GET_GLOBAL_<name>, "
+            "which only the global's declaration provides. Declare the global in the CONFIGURATION built with it."]
     if any(_MISSING_WRAPPER.search(d) for d in diags):
         diags = diags + [
             "note: iec2c used a call wrapper it never defined (MatIEC defect: inside a FUNCTION_BLOCK, a "
@@ -253,14 +266,15 @@ def _explain_matiec_c_errors(diags: list[str]) -> list[str]:
 
 
 def _matiec_unit_flags() -> list[str]:
-    """Flags of the units iec2c wrote: an index out of range traps (the glue reports kind 2); and since
+    """Flags of the units iec2c wrote: an index out of range, a shift count out of range and an undefined
+    float -> integer conversion stop the scan (the glue reports kinds 2, 6 and 7); and since
     MatIEC sometimes calls a helper it never declares (nor defines), an implicit `int` declaration, which
     would compile into wrong code, is an error at the ST line."""
-    return cc.bounds_trap_flags() + ["-Werror=implicit-function-declaration"]
+    return cc.check_flags() + ["-Werror=implicit-function-declaration"]
 
 
 def trap_flags_supported() -> bool:
-    return bool(cc.bounds_trap_flags())
+    return bool(cc.check_flags())
 
 
 def _builtin_generate(src: _sources.Sources, c_dir: Path) -> tuple[dict, list[Path], list[Path]]:

@@ -59,18 +59,38 @@ def supports(flags: tuple[str, ...]) -> bool:
     return proc.returncode == 0
 
 
-def bounds_trap_flags() -> list[str]:
-    """Flags that make an out-of-range index of a C array trap (SIGILL), checked one by one for support.
+# the checks of iec2c's C for behaviour C leaves undefined and a PLC must not meet silently: an index out
+# of range, a shift count out of range, a float -> integer conversion out of range (inf, NaN included)
+CHECKS = "shift-exponent,float-cast-overflow"
 
+
+def check_flags() -> list[str]:
+    """Flags that stop iec2c's C at an out-of-range index, shift count or float -> integer conversion,
+    checked one by one for support.
+
+    First choice: UBSan's checks calling its `_abort` entry points, which the glue defines (plc_glue.c),
+    so each check is a PLC fault of its own kind. Else a trapping bounds check alone (SIGILL, kind 2).
     `bounds-strict` also checks the trailing array member of a struct, which is exactly MatIEC's
     `struct {T table[n];}` reached through a pointer; plain `bounds` leaves those unchecked.
     """
-    for flags in (("-fsanitize=bounds-strict", "-fsanitize-undefined-trap-on-error"),
+    return list(_check_flags())
+
+
+@functools.lru_cache(maxsize=None)
+def _check_flags() -> tuple[str, ...]:
+    for flags in ((f"-fsanitize=bounds-strict,{CHECKS}", "-fno-sanitize-recover=all"),
+                  (f"-fsanitize=bounds,{CHECKS}", "-fno-sanitize-recover=all"),
+                  ("-fsanitize=bounds-strict", "-fsanitize-undefined-trap-on-error"),
                   ("-fsanitize=bounds", "-fsanitize-trap=bounds"),
                   ("-fsanitize=bounds", "-fsanitize-undefined-trap-on-error")):
         if supports(flags):
-            return list(flags)
-    return []
+            return flags
+    return ()
+
+
+def checks_undefined_values() -> bool:
+    """Whether iec2c's C is stopped at shift counts and conversions that C leaves undefined."""
+    return any(CHECKS in f for f in _check_flags())
 
 
 def compile_shared(units: list[Path], output: Path, *, include_dirs: list[Path] = (),

@@ -96,7 +96,24 @@ def cmd_build(args) -> int:
     print(f"{res.entry}: {how} with {res.backend} in {res.seconds:.3f} s")
     print(f"  library:  {res.library}")
     print(f"  manifest: {res.manifest}")
+    if res.backend == "matiec":
+        _report_for_semantics(args)
     return 0
+
+
+def _report_for_semantics(args) -> None:
+    """Which FOR semantics this iec2c has, and the program's FOR loops that it changes (spec/matiec.md
+    7.1): users' iec2c differ there."""
+    from . import cache as _cache, for_loops, for_semantics, sources as _sources
+    src = _sources.collect(args.path, root=args.root)
+    try:
+        sem = for_semantics.probe(_cache.default_dir(src.root, src.writable_tree))
+    except Exception as exc:        # the probe is advice: a build that worked is not failed by it
+        print(f"warning: the FOR semantics of this iec2c could not be measured: {exc}", file=sys.stderr)
+        return
+    print(f"  {sem.describe()}")
+    for line in for_loops.warnings(src.files, src.root, src.search, sem):
+        print(line, file=sys.stderr)
 
 
 def _parse_value(text: str):

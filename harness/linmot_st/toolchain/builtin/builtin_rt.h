@@ -46,19 +46,35 @@ extern double strtod(const char *nptr, char **endptr);
 #define __FAULT_DIV0 1
 #define __FAULT_INDEX 2
 #define __FAULT_ARITH 3
+#define __FAULT_SHIFT 6        /* a shift count MatIEC's C leaves undefined (plc/faults.py names each kind) */
+#define __FAULT_REAL_TO_INT 7  /* a REAL -> integer conversion MatIEC's C leaves undefined */
 
 static void __fault(int kind, const char *pou, const char *file, int line) __attribute__((noreturn, cold, noinline));
 static void __fault(int kind, const char *pou, const char *file, int line) { plc_raise_fault(kind, pou, file, line); }
+#define __SITE const char *p, const char *f, int l
+
+/* MatIEC converts doubles to long and int where this runtime computes in 64-bit nanoseconds: where its
+ * conversion is undefined (out of range, inf, NaN), a PLC fault rather than a value of our own */
+#define __LONG_LO_EXCL (-9223372036854777856.0)   /* the double below -2^63 */
+#define __LONG_HI_EXCL 9223372036854775808.0      /* 2^63 */
+static inline void __check_long(double x, __SITE) {
+    if (!(x > __LONG_LO_EXCL && x < __LONG_HI_EXCL)) __fault(__FAULT_REAL_TO_INT, p, f, l);
+}
 
 /* ---------------------------------------------------------------- durations */
 #define __T2NS(t) ((__ns_t)(t).tv_sec * 1000000000LL + (__ns_t)(t).tv_nsec)
 static inline TIME __ns2t(__ns_t ns) { TIME r; r.tv_sec = (long)(ns / 1000000000LL); r.tv_nsec = (long)(ns % 1000000000LL); return r; }
 #define __NS2T(ns) __ns2t(ns)
-static inline __ns_t __time_mul(__ns_t t, double k) {
-    /* MatIEC multiplies seconds and nanoseconds in double and truncates */
+static inline __ns_t __time_mul(__ns_t t, double k, __SITE) {
+    /* MatIEC multiplies seconds and nanoseconds in double and truncates: the seconds to time_t, the
+     * nanoseconds to int (so T#999ms * 3.0 is already out of its range) */
     double s_f = (double)(t / 1000000000LL) * k;
-    __ns_t s = (__ns_t)s_f;
-    __ns_t ns = (__ns_t)((double)(t % 1000000000LL) * k);
+    double ns_f = (double)(t % 1000000000LL) * k;
+    __ns_t s, ns;
+    __check_long(s_f, p, f, l);
+    if (!(ns_f > -2147483649.0 && ns_f < 2147483648.0)) __fault(__FAULT_REAL_TO_INT, p, f, l);
+    s = (__ns_t)s_f;
+    ns = (__ns_t)ns_f;
     return s * 1000000000LL + (__ns_t)((s_f - (double)s) * 1e9) + ns;
 }
 static inline __ns_t __time_div(__ns_t t, double k, const char *p, const char *f, int l) {
@@ -66,7 +82,9 @@ static inline __ns_t __time_div(__ns_t t, double k, const char *p, const char *f
     __ns_t s;
     if (k == 0) __fault(__FAULT_DIV0, p, f, l);
     s_f = (double)(t / 1000000000LL) / k;
+    __check_long(s_f, p, f, l);
     s = (__ns_t)s_f;
+    __check_long((double)(t % 1000000000LL) / k + (s_f - (double)s) * 1e9, p, f, l);
     return s * 1000000000LL + (__ns_t)((double)(t % 1000000000LL) / k + (s_f - (double)s) * 1e9);
 }
 
@@ -111,44 +129,67 @@ __UINT_DIV(UINT)
 __UINT_DIV(UDINT)
 __UINT_DIV(ULINT)
 
-/* ---------------------------------------------------------------- bit shifts and rotations */
-#define __SHIFTS(T, N) \
-static inline T __shl_##T(T x, long long n) { return (n < 0 || n >= N) ? 0 : (T)((unsigned long long)x << n); } \
-static inline T __shr_##T(T x, long long n) { return (n < 0 || n >= N) ? 0 : (T)((unsigned long long)x >> n); } \
-static inline T __rol_##T(T x, long long n) { unsigned k = (unsigned)((unsigned long long)n % N); \
+/* ---------------------------------------------------------------- bit shifts and rotations
+ * MatIEC's C is `IN << N` / `IN >> N` in the C type of IN after int promotion (CW bits: 32 for BYTE and
+ * WORD), so a count < 0 or >= CW is undefined behaviour there (x86 masks it, gcc folds constants its own
+ * way): a PLC fault. A count from N to CW - 1 shifts every bit out (0), as MatIEC's promoted shift does.
+ * ROL/ROR: MatIEC reduces the count modulo N (a negative count as unsigned long, which is the floor
+ * modulo) and then shifts by N - k, which for k = 0 is undefined where N = CW (DWORD, LWORD): a fault. */
+#define __SHIFTS(T, N, CW) \
+static inline T __shl_##T(T x, long long n, __SITE) { if (n < 0 || n >= CW) __fault(__FAULT_SHIFT, p, f, l); \
+    return n >= N ? 0 : (T)((unsigned long long)x << n); } \
+static inline T __shr_##T(T x, long long n, __SITE) { if (n < 0 || n >= CW) __fault(__FAULT_SHIFT, p, f, l); \
+    return n >= N ? 0 : (T)((unsigned long long)x >> n); } \
+static inline unsigned __rot_count_##T(long long n, __SITE) { unsigned k = (unsigned)((unsigned long long)n % N); \
+    if (k == 0 && N == CW) __fault(__FAULT_SHIFT, p, f, l); \
+    return k; } \
+static inline T __rol_##T(T x, long long n, __SITE) { unsigned k = __rot_count_##T(n, p, f, l); \
     return k ? (T)(((unsigned long long)x << k) | ((unsigned long long)x >> (N - k))) : x; } \
-static inline T __ror_##T(T x, long long n) { unsigned k = (unsigned)((unsigned long long)n % N); \
+static inline T __ror_##T(T x, long long n, __SITE) { unsigned k = __rot_count_##T(n, p, f, l); \
     return k ? (T)(((unsigned long long)x >> k) | ((unsigned long long)x << (N - k))) : x; }
-__SHIFTS(BYTE, 8)
-__SHIFTS(WORD, 16)
-__SHIFTS(DWORD, 32)
-__SHIFTS(LWORD, 64)
-static inline BOOL __shl_BOOL(BOOL x, long long n) { return n == 0 ? x : 0; }
-static inline BOOL __shr_BOOL(BOOL x, long long n) { return n == 0 ? x : 0; }
-static inline BOOL __rol_BOOL(BOOL x, long long n) { (void)n; return x; }
-static inline BOOL __ror_BOOL(BOOL x, long long n) { (void)n; return x; }
+__SHIFTS(BYTE, 8, 32)
+__SHIFTS(WORD, 16, 32)
+__SHIFTS(DWORD, 32, 32)
+__SHIFTS(LWORD, 64, 64)
+/* MatIEC's BOOL versions are defined for every count */
+static inline BOOL __shl_BOOL(BOOL x, long long n, __SITE) { (void)p; (void)f; (void)l; return n == 0 ? x : 0; }
+static inline BOOL __shr_BOOL(BOOL x, long long n, __SITE) { (void)p; (void)f; (void)l; return n == 0 ? x : 0; }
+static inline BOOL __rol_BOOL(BOOL x, long long n, __SITE) { (void)n; (void)p; (void)f; (void)l; return x; }
+static inline BOOL __ror_BOOL(BOOL x, long long n, __SITE) { (void)n; (void)p; (void)f; (void)l; return x; }
 
-/* ---------------------------------------------------------------- REAL -> integer: round half to even */
-static inline long long __r2i(double x) {
-    double r = __builtin_rint(x);
-    if (!(r > -9223372036854775808.0)) return (-9223372036854775807LL - 1);
-    if (!(r < 9223372036854775808.0)) return 9223372036854775807LL;
-    return (long long)r;
+/* ---------------------------------------------------------------- REAL -> integer
+ * MatIEC's __real_to_sint: d = x + 0.5 (x - 0.5 below 0); an integral d rounds to even, any other d
+ * truncates; computed in LINT, so only a d outside LINT (inf, NaN included) is undefined there: a PLC
+ * fault. A narrower target then wraps, as gcc converts. Unsigned and bit-string targets: 0 for a
+ * negative x or NaN, else the same LINT path (so 2^63 and above is undefined even for ULINT). */
+static inline long long __r2i(double x, __SITE) {
+    double d = x >= 0 ? x + 0.5 : x - 0.5;
+    __check_long(d, p, f, l);
+    return __builtin_trunc(d) == d ? ((long long)d / 2) * 2 : (long long)d;
 }
-static inline unsigned long long __r2u(double x) {
-    double r;
+static inline unsigned long long __r2u(double x, __SITE) {
     if (!(x >= 0)) return 0;
-    r = __builtin_rint(x);
-    if (!(r < 18446744073709551616.0)) return 18446744073709551615ULL;
-    return (unsigned long long)r;
+    return (unsigned long long)__r2i(x, p, f, l);
+}
+/* TRUNC: MatIEC's C casts straight to the target type, which is undefined unless the truncated value fits
+ * that type: lo and hi are the exclusive bounds of x that fit */
+static inline long long __trunc_s(double x, double lo, double hi, __SITE) {
+    if (!(x > lo && x < hi)) __fault(__FAULT_REAL_TO_INT, p, f, l);
+    return (long long)x;
+}
+static inline unsigned long long __trunc_u(double x, double hi, __SITE) {
+    if (!(x > -1.0 && x < hi)) __fault(__FAULT_REAL_TO_INT, p, f, l);
+    return (unsigned long long)x;
 }
 static inline long long __trunc_i(double x) {
     if (!(x > -9223372036854775808.0)) return (-9223372036854775807LL - 1);
     if (!(x < 9223372036854775808.0)) return 9223372036854775807LL;
     return (long long)x;
 }
-static inline __ns_t __r2time(double x) {   /* seconds, as MatIEC: whole seconds + truncated fraction */
-    __ns_t s = __trunc_i(x);
+static inline __ns_t __r2time(double x, __SITE) {   /* seconds, as MatIEC: whole seconds + truncated fraction */
+    __ns_t s;
+    __check_long(x, p, f, l);
+    s = (__ns_t)x;
     return s * 1000000000LL + (__ns_t)((x - (double)s) * 1e9);
 }
 

@@ -22,6 +22,8 @@ from .errors import BuiltinCompileError, Diagnostic
 from .symbols import PouSym, Program, Var
 
 FORCE = "__FORCED"
+# operators of a left-associative chain per C sub-expression (gcc parses nesting recursively)
+CHAIN_CHUNK = 200
 
 
 def cname_of(t: T.Type) -> str:
@@ -305,7 +307,7 @@ class CodeGen:
             yield f"{cfg.key}__{v.key}", f"{cfg.key}.{v.key}", v, None
         for r in cfg.resources:
             for v in r.globals.values():
-                yield f"{r.key}__{v.key}", f"{cfg.key}.{r.key}.{v.key}", v, r
+                yield f"{r.key}__{v.key}", f"{r.path()}.{v.key}", v, r
 
     def global_decls(self) -> list[str]:
         lines = ["/* ---- located variables, globals, program instances */"]
@@ -807,15 +809,23 @@ class CodeGen:
         return f"(({t.cname})(0 - ({u}){a}))"
 
     def ex_BinOp(self, e: A.BinOp) -> str:
-        # a left-associative chain (a sum of 5000 terms) is walked iteratively: its left operands nest
-        # without bound (gcc takes the nested C in its stride)
+        # a left-associative chain (a sum of 16,000 terms) is walked iteratively: its left operands nest
+        # without bound. gcc's parser recurses on each nested parenthesis and crashes beyond some thousands,
+        # so every CHAIN_CHUNK operators the partial result goes into a temporary of exactly its C type
+        # (__auto_type): each operator keeps its own C (its wrap to the node's type, its fault site), and
+        # the operands are still evaluated left to right.
         spine = [e]
         while isinstance(spine[-1].left, A.BinOp):
             spine.append(spine[-1].left)
         acc = self.expr(spine[-1].left)
-        for node in reversed(spine):
+        steps = []
+        for i, node in enumerate(reversed(spine), 1):
             acc = self.binop(node, acc)
-        return acc
+            if i % CHAIN_CHUNK == 0 and i < len(spine):
+                tmp = self.new_tmp()
+                steps.append(f"__auto_type {tmp} = {acc};")
+                acc = tmp
+        return "({ " + " ".join(steps) + f" {acc}; }})" if steps else acc
 
     def binop(self, e: A.BinOp, a: str) -> str:
         """C of `e`, its left operand's C being `a`."""
@@ -854,10 +864,8 @@ class CodeGen:
             return f"({a} {op} {b})"
         rt = e.right.ty.base()
         k = f"(double)({b})"
-        if op == "*":
-            if T.is_int(rt):
-                return f"((__ns_t)((unsigned long long){a} * (unsigned long long)(long long)({b})))"
-            return f"__time_mul({a}, {k})"
+        if op == "*":       # by an integer too: MatIEC's C multiplies in double (__time_mul) either way
+            return f"__time_mul({a}, {k}, {self.site(e.pos).args()})"
         return f"__time_div({a}, {k}, {self.site(e.pos).args()})"
 
     # ------------------------------------------------------------------ calls
@@ -988,7 +996,7 @@ class CodeGen:
         if n == "MOVE":
             return cs[0]
         if n == "TRUNC":
-            return f"(({t.cname})__trunc_i((double)({cs[0]})))"
+            return self.trunc(t, cs[0], e.pos)
         if n in ("AND", "OR", "XOR"):
             op = {"AND": "AND", "OR": "OR", "XOR": "XOR"}[n]
             acc = cs[0]
@@ -1001,7 +1009,7 @@ class CodeGen:
         if n == "NOT":
             return f"(!{cs[0]})" if t is T.BOOL else f"(({t.cname})~{cs[0]})"
         if n in ("SHL", "SHR", "ROL", "ROR"):
-            return f"__{n.lower()}_{t.cname}({cs[0]}, (long long)({cs[1]}))"
+            return f"__{n.lower()}_{t.cname}({cs[0]}, (long long)({cs[1]}), {self.site(e.pos).args()})"
         if n == "SEL":
             return f"({cs[0]} ? {cs[2]} : {cs[1]})"
         if n in ("MAX", "MIN"):
@@ -1079,6 +1087,15 @@ class CodeGen:
             parts.append(f"if ({self.cmp_expr(op, acc, x, t)}) {acc} = {x}")
         return "({ " + "; ".join(parts) + f"; {acc}; }})"
 
+    def trunc(self, t: T.Type, a: str, pos: A.Pos) -> str:
+        """TRUNC to t: faults where MatIEC's direct C cast is undefined (the value does not fit t)."""
+        site = self.site(pos).args()
+        if t.kind == "uint":
+            return f"(({t.cname})__trunc_u((double)({a}), {float(2 ** t.bits)!r}, {site}))"
+        # the double just below -2^(bits-1), which -2^(bits-1) - 1 rounds to for 64 bits
+        lo = -(2.0 ** (t.bits - 1)) - (1.0 if t.bits < 64 else 2048.0)
+        return f"(({t.cname})__trunc_s((double)({a}), {lo!r}, {float(2 ** (t.bits - 1))!r}, {site}))"
+
     def conversion(self, sc: SF.StdCall, arg: A.Node, e: A.Call) -> str:
         src, dst = sc.conv
         if dst is None:
@@ -1123,14 +1140,14 @@ class CodeGen:
             return f"(({dst.cname})(({a}) / 1000000000LL))"
         if d in ("time", "date", "tod", "dt"):
             if s == "real":
-                return f"__r2time((double)({a}))"
+                return f"__r2time((double)({a}), {self.site(e.pos).args()})"
             if s == "uint" or s == "bit":
                 return f"((__ns_t)((unsigned long long)({a}) * 1000000000ULL))"
             return f"((__ns_t)((unsigned long long)(long long)({a}) * 1000000000ULL))"
         if s == "real" and d in ("sint",):
-            return f"(({dst.cname})__r2i((double)({a})))"
+            return f"(({dst.cname})__r2i((double)({a}), {self.site(e.pos).args()}))"
         if s == "real" and d in ("uint", "bit"):
-            return f"(({dst.cname})__r2u((double)({a})))"
+            return f"(({dst.cname})__r2u((double)({a}), {self.site(e.pos).args()}))"
         return f"(({dst.cname})({a}))"
 
     # ------------------------------------------------------------------ configuration
@@ -1251,7 +1268,7 @@ class CodeGen:
         if cfg is not None:
             for r in cfg.resources:
                 for inst in r.programs:
-                    roots.append((f"{cfg.key}.{r.key}.{inst.key}", self.type_ref(inst.pou.ty, types),
+                    roots.append((f"{r.path()}.{inst.key}", self.type_ref(inst.pou.ty, types),
                                   f"&{r.key}__{inst.key}"))
         for cell in self.prog.located.values():
             roots.append((cell.location, self.type_ref(cell.ty, types), f"&{cell.cname}"))

@@ -9,7 +9,9 @@
  *
  * Faults. The builtin backend checks divisions and indices itself and calls plc_raise_fault(). C compiled
  * by iec2c does not: there an integer division by zero raises SIGFPE and an index out of range traps
- * (the backend compiles it with a trapping bounds sanitizer: SIGILL). The handlers below turn such a
+ * (the backend compiles it with UBSan's bounds, shift-exponent and float-cast-overflow checks, whose entry
+ * points are defined below; with a compiler that only has a trapping bounds check: SIGILL). The
+ * handlers below turn such a
  * signal, raised by this thread inside plc_step/plc_init, into a siglongjmp back to the loop. A signal
  * raised anywhere else is passed on to the handler that was installed before ours (pytest's
  * faulthandler, Python's default, or another PLC instance's glue).
@@ -259,6 +261,41 @@ static void watchdog_arm(int on)
 
 __attribute__((visibility("default"))) void plc_set_watchdog_ns(unsigned long long ns) { watchdog_ns = ns; }
 __attribute__((visibility("default"))) unsigned long long plc_watchdog_ns(void) { return watchdog_ns; }
+
+/* UBSan's entry points for the checks compiled into iec2c's C (toolchain/cc.py check_flags, with
+ * -fno-sanitize-recover: the _abort variants). Each ends the scan as a PLC fault of its own kind located
+ * at its caller: the loader finds the POU and the ST line in the library's line table (iec2c -O l), since
+ * the check itself sits in MatIEC's headers. The data they get (source location, types) is not used.
+ * Hidden: bound inside this library at link time, so neither another PLC library nor a libubsan loaded
+ * into the process can take the calls. */
+static void ubsan_fault(int kind, void *ret) __attribute__((noreturn));
+static void ubsan_fault(int kind, void *ret)
+{
+    if (!(in_scan && pthread_equal(pthread_self(), scan_thread))) abort();
+    fault_kind = kind;
+    locate_pc((unsigned long)ret - 1);   /* inside the call, not after it */
+    in_scan = 0;
+    siglongjmp(scan_jmp, 1);
+}
+
+__attribute__((visibility("hidden"), noreturn)) void __ubsan_handle_out_of_bounds_abort(void *data, void *index)
+{
+    (void)data; (void)index;
+    ubsan_fault(2, __builtin_return_address(0));
+}
+
+__attribute__((visibility("hidden"), noreturn))
+void __ubsan_handle_shift_out_of_bounds_abort(void *data, void *lhs, void *rhs)
+{
+    (void)data; (void)lhs; (void)rhs;
+    ubsan_fault(6, __builtin_return_address(0));
+}
+
+__attribute__((visibility("hidden"), noreturn)) void __ubsan_handle_float_cast_overflow_abort(void *data, void *from)
+{
+    (void)data; (void)from;
+    ubsan_fault(7, __builtin_return_address(0));
+}
 
 /* Called by code of the builtin backend at a checked fault; does not return. Outside a scan (which
  * cannot happen for generated code) it records the fault and returns to nothing: abort is the only
