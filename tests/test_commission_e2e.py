@@ -5,6 +5,8 @@ One build per backend serves every test (linmot_st.commission.testing)."""
 
 from __future__ import annotations
 
+import re
+
 import json
 import os
 
@@ -48,14 +50,19 @@ def test_one_axis(backend):
     assert list(phases) == ["start", "check", "preflight", "params", "curves", "ct", "flash", "verify"]
     for name, n in EXPECTED.items():
         assert phases[name].exchanges == n, name
-    # each exchange takes one scan: the answer is checked and the next request sent in the same scan,
-    # across items and phases; the header costs 2 scans; the last scan of the run sees the last answer
-    for name in ("check", "params", "curves", "ct"):
-        assert phases[name].scans == phases[name].exchanges, name
-    assert phases["verify"].scans == phases["verify"].exchanges + 1
+    # the answer is checked and the next request sent in the scan that sees it, across items and phases:
+    # a request leaves at most one task interval after the previous answer ended; the exceptions are the
+    # pre-flight's curve records (read from the dataset, one per scan, no exchange) and the header
+    tick = o.result.tick_ns
+    windows = [(p.t0_ns, p.t1_ns) for p in ax.phases if p.phase in ("check", "preflight", "params", "curves", "ct",
+                                                                      "verify")]
+    frames = [e for e in o.result.trace if e.status != "error" and e.frame.can_id in (0x581, 0x601)]
+    gaps = [b.start_ns - a.end_ns for w0, w1 in windows for a, b in zip(frames, frames[1:])
+            if a.frame.can_id == 0x581 and w0 <= a.start_ns and b.start_ns < w1]
+    assert gaps and min(gaps) >= 0
+    assert sum(g > tick for g in gaps) <= len(PVL.curves) + 2, sorted(gaps)[-8:]
+    assert max(gaps) <= (len(PVL.curves) + 2) * tick
     assert (phases["start"].scans, phases["start"].exchanges) == (2, 0)
-    # the pre-flight reads one curve record per scan (no exchange) and goes back to the first row
-    assert phases["preflight"].scans == phases["preflight"].exchanges + len(PVL.curves) + 1
     # the bus carried exactly the FB's requests, each answered
     assert len(requests(o.result, 1)) == ax.exchanges
     assert sum(1 for e in o.result.trace if e.frame.can_id == 0x581) == ax.exchanges
@@ -64,7 +71,7 @@ def test_one_axis(backend):
     assert sorted(drive.ct.flash) == [1, 2, 3]
     assert drive.string(0x03E8) == "LinMot-ST Demo" and drive.rom(0x1601) == -100000
     text = o.report.text()
-    assert "result: PASSED" in text and "curves                         532     532" in text
+    assert "result: PASSED" in text and re.search(r"curves +532 +[0-9]+ ", text)
 
 
 @pytest.mark.parametrize("force", [True, False], ids=["full", "recommission"])
@@ -139,12 +146,19 @@ def test_report_figures_agree_with_the_trace():
     assert tr["lower_bound_ms"] == pytest.approx(bound_ms(2 * TRANSFER), rel=1e-12)
     assert tr["ratio"] == pytest.approx(tr["time_ms"] / tr["lower_bound_ms"]) and 1.0 < tr["ratio"] < 1.2
     assert tr["load"] > 0.9                                          # the bus is the limit for two axes
-    # the bus's busy time is the sum of the frames' bit lengths (stuff bits and IFS included) in the window
+    # the bus's busy time is the frames' bit lengths (stuff bits and IFS included) clipped to the window: the
+    # drives' PDOs on entering Operational (the channel's NMT start on their boot-up) are still on the wire
+    # when the axes start together, so the first of them straddles the window's start
     t0, t1 = r.t_start_ns, r.t_end_ns
-    window = [e for e in r.trace if t0 <= e.start_ns < t1 and e.status != "error"]
+    assert not any(e.status == "error" for e in r.trace)
+    window = [e for e in r.trace if t0 <= e.start_ns < t1]
     assert f["bus"]["frames"] == len(window) < f["bus"]["frames_in_trace"] == len(r.trace)
-    assert r.stats.busy_ns == sum(bus_bits(e.frame) for e in window) * r.bit_ns
-    assert f["bus"]["busy_ms"] == pytest.approx(sum(bus_bits(e.frame) for e in window) * 2e-3, rel=1e-12)
+
+    def busy_in_window(e):
+        return max(0, min(e.start_ns + bus_bits(e.frame) * r.bit_ns, t1) - max(e.start_ns, t0))
+    busy_ns = sum(busy_in_window(e) for e in r.trace)
+    assert r.stats.busy_ns == busy_ns
+    assert f["bus"]["busy_ms"] == pytest.approx(busy_ns / 1e6, rel=1e-12)
     # what the plots show as read back is what the PVL says, for every curve and drive
     for ax in r.axes:
         t_verify = next(p.t0_ns for p in ax.phases if p.phase == "verify")

@@ -333,9 +333,9 @@ def test_command_exits_non_zero_when_the_drives_never_boot(tmp_path, capsys):
 
 def test_command_line_errors(tmp_path, capsys):
     with pytest.raises(SystemExit) as exit_:
-        main(["commission", str(EXAMPLE), "--axes", "9"])
+        main(["commission", str(EXAMPLE), "--axes", "33"])
     assert exit_.value.code == 2
-    assert "linmot-st commission: error: argument --axes: 9: must be 1..8" in capsys.readouterr().err
+    assert "linmot-st commission: error: argument --axes: 33: must be 1..32" in capsys.readouterr().err
     assert main(["commission", str(EXAMPLE), "--axes", "2", "--node-ids", "3,3"]) == 2
     assert main(["commission", str(EXAMPLE), "--axes", "3", "--node-ids", "1,2"]) == 2
     assert main(["commission", str(EXAMPLE), "--no-emulate"]) == 2

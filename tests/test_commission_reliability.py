@@ -224,7 +224,7 @@ def test_without_the_curve_memory_the_drive_refuses_after_the_delete():
 
 def test_two_axes_on_one_node_id_the_second_is_refused_before_anything_is_sent():
     def same_node(plc):
-        plc["MAIN.NODEIDS"] = [1, 1, 3, 4, 5, 6, 7, 8]
+        plc["MAIN.NODEIDS"] = [1, 1] + list(range(3, 33))
     o = commission(axes=2, prepare_plc=same_node)
     first, second = o.result.axes
     assert first.done and second.error and second.error_id == 0x0208 and second.exchanges == 0

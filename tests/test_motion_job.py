@@ -108,9 +108,9 @@ def test_motion_command_writes_the_reports(tmp_path, capsys):
 
 def test_motion_command_refuses_bad_arguments(capsys):
     with pytest.raises(SystemExit) as exit_:                   # argparse's check, in the commands' one style
-        main(["motion", str(EXAMPLE), "--axes", "9"])
+        main(["motion", str(EXAMPLE), "--axes", "33"])
     assert exit_.value.code == 2
-    assert "linmot-st motion: error: argument --axes: 9: must be 1..8" in capsys.readouterr().err
+    assert "linmot-st motion: error: argument --axes: 33: must be 1..32" in capsys.readouterr().err
 
 
 def test_motion_job_on_python_can_virtual_bus(tmp_path, capsys):

@@ -47,7 +47,8 @@ def test_axis_without_a_channel_is_not_ready():
     assert r.error and r.error_id == E["NotReady"] and r.scans == 1
 
 
-def test_full_mailbox():
+def test_full_mailbox_defers_the_request_to_the_next_scan():
+    # 32 axes on one mailbox fill Tx in one scan: the request waits in the axis, nothing is lost or failed
     b = Bench(nodes=1)
     for i in range(1, 33):
         b.plc[f"{MAILBOX}.TX[{i}].ID"] = 0x7FF
@@ -55,12 +56,28 @@ def test_full_mailbox():
     b.fb("RD").start(UPID=0x1005)
     b.plc[f"{MAILBOX}.TXCOUNT"] = 32            # another user of the mailbox filled it in this scan
     lost = b.plc[f"{MAILBOX}.TXLOST"]
+    sent = b.sim.frames_sent
     b.step(1)
-    assert b.fb("RD")["ERROR"] and b.fb("RD")["ERRORID"] == E["TxFull"]
-    assert b.plc[f"{MAILBOX}.TXLOST"] == lost + 1
-    b.fb("RD")["EXECUTE"] = False
+    assert not b.fb("RD")["ERROR"] and b.fb("RD")["BUSY"]
+    assert b.sim.frames_sent - sent == 32       # the other user's frames only
+    assert b.plc[f"{MAILBOX}.TXLOST"] == lost
     b.step(1)
-    assert b.fb("RD").run(UPID=0x1005).done       # nothing was left outstanding
+    assert b.sim.frames_sent - sent == 33         # the request: sent by the channel in the next scan
+    r = b.fb("RD").run(UPID=0x1005)               # its answer (behind the other user's 32 frames on the bus)
+    assert r.done and b.plc[f"{MAILBOX}.TXLOST"] == lost
+
+
+def test_mailbox_that_stays_full_ends_in_the_timeout():
+    b = Bench(nodes=1)
+    b.fb("RD").start(UPID=0x1005)
+    errors = set()
+    for _ in range(1200):                         # SdoTimeout 1 s at 1 ms scans
+        b.plc[f"{MAILBOX}.TXCOUNT"] = 32
+        b.step(1)
+        if b.fb("RD")["ERROR"]:
+            errors.add(b.fb("RD")["ERRORID"])
+            break
+    assert errors == {E["SdoTimeout"]}
 
 
 def test_segmented_answer_is_a_protocol_error():

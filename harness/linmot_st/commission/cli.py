@@ -27,6 +27,29 @@ def _node_ids(text: str) -> list[int]:
         raise argparse.ArgumentTypeError(f"node IDs {text!r}: a comma-separated list such as 1,2,5") from None
 
 
+def _node_pvl(text: str) -> tuple[int, str]:
+    node, sep, path = text.partition("=")
+    try:
+        n = int(node, 0)
+    except ValueError:
+        n = 0
+    if not sep or not path or not 1 <= n <= 127:
+        raise argparse.ArgumentTypeError(f"{text!r}: NODE=FILE.pvl with a node ID 1..127, e.g. 3=press.pvl")
+    return n, path
+
+
+def _task_interval(text: str) -> int:
+    from .project import parse_task_interval
+    try:
+        return parse_task_interval(text)
+    except ValueError as e:
+        raise argparse.ArgumentTypeError(str(e)) from None
+
+
+def _duration(ns: int) -> str:
+    return f"{ns // 1_000_000}ms" if ns % 1_000_000 == 0 else f"{ns // 1_000}us"
+
+
 def register(subparsers) -> None:
     p = subparsers.add_parser(
         "commission", help="commission emulated E1100 drives from a PVL file with the PLC, and report",
@@ -45,6 +68,9 @@ def register(subparsers) -> None:
                    help="the PLC reads everything back (default on)")
     p.add_argument("--no-emulate", dest="emulate", action="store_false",
                    help="real drives on a real bus: no emulated drives, no memory verification")
+    p.add_argument("--task-interval", type=_task_interval, default=None, metavar="DURATION",
+                   help="the PLC task's interval, built into the program, 50us..10ms (default 1ms; 250us keeps "
+                        "the bus busy for few drives at 1 Mbit/s: docs/commissioning.md, \"Task interval\")")
     p.add_argument("--force", action="store_true",
                    help="write everything; by default the PLC reads what each drive holds and writes only what "
                         "differs (no flash save, no reset when nothing does)")
@@ -66,8 +92,12 @@ def command_line(args: argparse.Namespace) -> str:
             parts += [flag, f"{value:g}" if isinstance(value, float) else str(value)]
     if args.node_ids:
         parts += ["--node-ids", ",".join(map(str, args.node_ids))]
+    for node, path in getattr(args, "pvl", None) or ():
+        parts += ["--pvl", f"{node}={path}"]
     if args.curve_memory is not None:
         parts += ["--curve-memory", str(args.curve_memory)]
+    if getattr(args, "task_interval", None) is not None:
+        parts += ["--task-interval", _duration(args.task_interval)]
     for name, default in (("live_ram", False), ("flash", True), ("reset", True), ("verify", True),
                           ("preflight", True)):
         if getattr(args, name) != default:
@@ -93,6 +123,7 @@ class Prepared:
     opts: object
     dataset: object
     project: object
+    datasets: object                   # datasets.Datasets: each node's
     build: object
     build_s: float
     rel: str
@@ -101,10 +132,12 @@ class Prepared:
 def add_run_arguments(p, *, timings_default: str) -> None:
     """The arguments `commission` and `motion` share."""
     p.add_argument("file", metavar="FILE.pvl", help="the PVL file (LinMot-Talk export)")
-    p.add_argument("--axes", type=int_range(1, 8), default=None, metavar="N",
-                   help="number of drives, 1..8 (default 1)")
+    p.add_argument("--axes", type=int_range(1, 32), default=None, metavar="N",
+                   help="number of drives, 1..32 on the one bus (default 1, or as many as --node-ids)")
     p.add_argument("--node-ids", type=_node_ids, default=None, metavar="IDS",
                    help="their CANopen node IDs, comma-separated (default 1..N)")
+    p.add_argument("--pvl", type=_node_pvl, action="append", default=[], metavar="NODE=FILE",
+                   help="the dataset of this node (repeat for others); the nodes without one get FILE.pvl")
     p.add_argument("--bus", default="sim", metavar="BUS",
                    help="sim (default: simulated bus, virtual time), virtual[:CHANNEL] (python-can, real time), "
                         "socketcan:CHANNEL, or INTERFACE:CHANNEL")
@@ -141,7 +174,8 @@ def prepare_run(args: argparse.Namespace, *, flash: bool = True, reset: bool = T
     from linmot_st.toolchain import CompileError
 
     from linmot_st.pvl.dataset import DatasetError, from_pvl
-    from .project import build_project, prepare
+    from .datasets import Datasets
+    from .project import TASK_INTERVAL_NS, build_project, prepare
     from .runner import RunOptions, check_bus_spec
 
     err = sys.stderr
@@ -176,9 +210,22 @@ def prepare_run(args: argparse.Namespace, *, flash: bool = True, reset: bool = T
                              "flash save")
     except ValueError as e:
         raise UsageError(str(e)) from None
+    per_node = {}
+    nodes = opts.nodes()
+    for node, path in getattr(args, "pvl", None) or ():
+        if node not in nodes:
+            raise UsageError(f"--pvl {node}={path}: node {node} is not commissioned (node IDs {nodes})")
+        if node in per_node:
+            raise UsageError(f"--pvl {node}=...: node {node} given twice")
+        other = load_or_report(path, err)
+        if other is None:
+            return 1
+        per_node[node] = (other, Path(path).name)
     try:
-        dataset = from_pvl(pvl)
-        project = prepare(pvl, Path(args.file).name)
+        datasets = Datasets.build(pvl, Path(args.file).name, per_node)
+        dataset = datasets.default.dataset
+        project = prepare(pvl, Path(args.file).name, text=datasets.st_text(),
+                          task_interval_ns=getattr(args, "task_interval", None) or TASK_INTERVAL_NS)
     except (DatasetError, FileNotFoundError) as e:
         error(args, str(e))
         return 1
@@ -188,7 +235,7 @@ def prepare_run(args: argparse.Namespace, *, flash: bool = True, reset: bool = T
     except CompileError as e:
         print(e, file=err)
         return 1
-    return Prepared(pvl, opts, dataset, project, res, time.perf_counter() - t0, _rel(project.entry))
+    return Prepared(pvl, opts, dataset, project, datasets, res, time.perf_counter() - t0, _rel(project.entry))
 
 
 def commission_report(args: argparse.Namespace, prep: Prepared, result, command: str):
@@ -244,7 +291,7 @@ def run_command(args: argparse.Namespace) -> int:
     progress = None if args.quiet else Progress(err)
     try:
         factory = _remembering_drives(args.drive_memory, prep.opts) if args.drive_memory else None
-        result = run(prep.pvl, prep.opts, prep.build, dataset=prep.dataset, progress=progress,
+        result = run(prep.pvl, prep.opts, prep.build, datasets=prep.datasets, progress=progress,
                      drive_factory=factory)
         if args.drive_memory:
             _keep_drives(args.drive_memory, result.drives)

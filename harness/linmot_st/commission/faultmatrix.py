@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable
 
 from linmot_st.bus import Frame
+from .runner import node_id_table
 
 MS = 1_000_000
 S = 1_000_000_000
@@ -246,7 +247,7 @@ class _Injector:
             self.plc["MAIN.START"] = False
         elif fam == "two_instances":
             self.event_ns = t
-            self.plc["MAIN.NODEIDS"] = [NODE, NODE, 3, 4, 5, 6, 7, 8]
+            self.plc["MAIN.NODEIDS"] = node_id_table([NODE, NODE])
             self.plc["MAIN.AXES"] = 2
         else:
             raise ValueError(f"unknown fault family {fam!r}")
@@ -279,7 +280,7 @@ class _Injector:
             self.drive.power_on(self.bus.now)
         if self.family == "two_instances":
             self.plc["MAIN.AXES"] = 1
-            self.plc["MAIN.NODEIDS"] = [NODE, 2, 3, 4, 5, 6, 7, 8]
+            self.plc["MAIN.NODEIDS"] = node_id_table([NODE])
 
 
 # ---------------------------------------------------------------- one cell

@@ -72,11 +72,14 @@ def compare(curve, node: int, written: bool, back: list[int] | None, source: str
     return rb
 
 
-def curve_read_backs(run, curve) -> list[ReadBack]:
+def curve_read_backs(run, curve, nodes=None) -> list[ReadBack]:
     """Each axis' copy of `curve` in a run (a runner.RunResult): the 62h answers of its VERIFY phase on the
-    bus, else (no verify pass, or the pass did not reach the curve) the emulated drive's RAM."""
+    bus, else (no verify pass, or the pass did not reach the curve) the emulated drive's RAM. `nodes`: only
+    these axes' (those commissioned with the curve's dataset)."""
     out = []
     for ax in run.axes:
+        if nodes is not None and ax.node_id not in nodes:
+            continue
         t_verify = next((p.t0_ns for p in ax.phases if p.phase == "verify"), None)
         drive = run.drives.get(ax.node_id)
         back, source = None, ""

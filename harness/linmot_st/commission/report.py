@@ -19,7 +19,7 @@ import textwrap
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from linmot_st.bus.bits import unstuffed_bus_bits
+from linmot_st.bus.bits import bus_bits, unstuffed_bus_bits
 from linmot_st.errors import describe
 from linmot_st.pvl.dataset import Dataset, expected_exchanges
 from .plots import ReadBack, curve_read_backs
@@ -80,6 +80,21 @@ class Context:
 
 
 @dataclass
+class DatasetGroup:
+    """One dataset file of a run and the axes commissioned with it."""
+    name: str
+    pvl: object
+    dataset: Dataset
+    nodes: list[int]
+    read_backs: dict[int, list[ReadBack]] = field(default_factory=dict)     # curve ID -> per axis
+
+
+def _dataset_counts(ds: Dataset) -> dict:
+    return dict(layers=len(ds.layers), parameters=len(ds.params), curves=len(ds.curves),
+                setpoints=sum(len(c[2]) for c in ds.curves), entries=len(ds.entries), words=ds.words)
+
+
+@dataclass
 class Report:
     ctx: Context
     run: RunResult
@@ -87,12 +102,17 @@ class Report:
     verification: Verification
     pvl: object
     figures: dict = field(default_factory=dict)
-    read_backs: dict[int, list[ReadBack]] = field(default_factory=dict)     # curve ID -> per axis
+    groups: list = field(default_factory=list)    # DatasetGroup per dataset file (one without per-node datasets)
 
     # ------------------------------------------------------------------ figures
     def compute(self) -> dict:
         r, bit = self.run, self.run.bit_ns
-        self.read_backs = {c.curve_id: curve_read_backs(r, c) for c in self.pvl.curves}
+        sets = r.datasets
+        own = None if sets is None or sets.single else {ax.node_id for ax in r.axes if sets.of(ax.node_id) is sets.default}
+        self.groups = self._dataset_groups(own)
+
+        def dataset_of(node: int) -> Dataset:
+            return self.dataset if own is None or node in own else sets.of(node).dataset
         axes = []
         for ax in r.axes:
             on_bus = _bus_exchanges(r.trace, ax.node_id, ax.started_ns, ax.ended_ns or r.t_end_ns)
@@ -108,6 +128,7 @@ class Report:
             t_ex = sum(p.exchanges for p in transfer)
             axes.append(dict(
                 axis=ax.axis, node=ax.node_id,
+                dataset=(self.ctx.pvl_path if own is None or ax.node_id in own else sets.of(ax.node_id).name),
                 result="done" if ax.done else ("error" if ax.error else "not finished"),
                 error_id=ax.error_id, error=describe(ax.error_id, ax.abort_code) if ax.error else "",
                 abort_code=ax.abort_code, failure=self.failure_text(ax) if ax.error else "",
@@ -132,23 +153,24 @@ class Report:
         complete = r.commissioned and r.options.force
         # all axes on the one bus: the bound counts the necessary exchanges of every axis (a failed run has
         # no necessary count: its bound counts what it did)
-        need = necessary_exchanges(self.dataset, r.options) * len(r.axes) if complete else None
+        need = sum(necessary_exchanges(dataset_of(a.node_id), r.options) for a in r.axes) if complete else None
         lb_actual = lower_bound_ns(total_ex, bit)
         lb = lower_bound_ns(need, bit) if need is not None else None
         windows = _merge([(p.t0_ns, p.t1_ns) for ax in r.axes for p in ax.phases if p.phase in TRANSFER_PHASES])
         tr_ns = sum(b - a for a, b in windows)
         tr_busy = sum(self._busy_ns(a, b) for a, b in windows)
         tr_ex = sum(a["transfer"]["exchanges"] for a in axes)
-        tr_need = necessary_exchanges(self.dataset, r.options, transfer_only=True) * len(r.axes) if complete else None
+        tr_need = (sum(necessary_exchanges(dataset_of(a.node_id), r.options, transfer_only=True) for a in r.axes)
+                   if complete else None)
         tr_lb_actual = lower_bound_ns(tr_ex, bit)
         tr_lb = lower_bound_ns(tr_need, bit) if tr_need is not None else None
+        tr_stuffed = stuffed_bound_ns(r, TRANSFER_PHASES, tr_need)
         st = r.stats
         self.figures = dict(
             command=self.ctx.command, pvl=self.ctx.pvl_path, backend=self.ctx.backend,
             build=dict(seconds=round(self.ctx.build_s, 3), cached=self.ctx.build_cached, project=self.ctx.project),
-            dataset=dict(layers=len(self.dataset.layers), parameters=len(self.dataset.params),
-                         curves=len(self.dataset.curves), setpoints=sum(len(c[2]) for c in self.dataset.curves),
-                         entries=len(self.dataset.entries), words=self.dataset.words),
+            dataset=_dataset_counts(self.dataset),
+            datasets=[dict(name=g.name, nodes=g.nodes, **_dataset_counts(g.dataset)) for g in self.groups],
             options=dict(axes=len(r.axes), node_ids=r.node_ids, bus=r.options.bus, bitrate=r.options.bitrate,
                          live_ram=r.options.live_ram, flash=r.options.flash, reset=r.options.reset,
                          verify=r.options.verify, preflight=r.options.preflight, force=r.options.force,
@@ -172,12 +194,14 @@ class Report:
                           lower_bound_ms=tr_lb / 1e6 if tr_lb is not None else None,
                           ratio=tr_ns / tr_lb if tr_lb else None,
                           lower_bound_actual_ms=tr_lb_actual / 1e6,
-                          ratio_actual=tr_ns / tr_lb_actual if tr_lb_actual else None),
-            curves=[dict(curve=cid, setpoints=len(c.setpoints),
+                          ratio_actual=tr_ns / tr_lb_actual if tr_lb_actual else None,
+                          lower_bound_stuffed_ms=tr_stuffed / 1e6 if tr_stuffed else None,
+                          ratio_stuffed=tr_ns / tr_stuffed if tr_stuffed else None),
+            curves=[dict(curve=c.curve_id, name=c.name, setpoints=len(c.setpoints), dataset=g.name,
                          nodes=[dict(node=rb.node, written=rb.written,
                                      read_back=len(rb.setpoints) if rb.setpoints else None, source=rb.source,
-                                     differ=rb.differ, verdict=rb.verdict) for rb in self.read_backs[cid]])
-                    for cid, c in ((c.curve_id, c) for c in self.pvl.curves)],
+                                     differ=rb.differ, verdict=rb.verdict) for rb in g.read_backs[c.curve_id]])
+                    for g in self.groups for c in g.pvl.curves],
             verification=dict(ok=self.verification.ok, skipped=self.verification.skipped,
                               by_plc=self.verification.by_plc,
                               checks=[dict(node=c.node, what=c.what, checked=c.checked, equal=c.equal,
@@ -188,17 +212,36 @@ class Report:
         )
         return self.figures
 
+    def _dataset_groups(self, own: set[int] | None) -> list["DatasetGroup"]:
+        """The first file's group (its nodes: `own`, None = every axis), then one per other dataset file."""
+        r, sets = self.run, self.run.datasets
+        nodes = [ax.node_id for ax in r.axes]
+        first = [n for n in nodes if own is None or n in own]
+        groups = [DatasetGroup(self.ctx.pvl_path, self.pvl, self.dataset, first)]
+        for src in (sets.sources[1:] if own is not None else ()):
+            mine = [n for n in nodes if sets.of(n) is src]
+            groups.append(DatasetGroup(src.name, src.pvl, src.dataset, mine))
+        groups = [g for g in groups if g.nodes] or groups[:1]        # --pvl for every node: not the first file
+        for g in groups:
+            g.read_backs = {c.curve_id: curve_read_backs(r, c, set(g.nodes)) for c in g.pvl.curves}
+        return groups
+
     def _busy_ns(self, t0: int, t1: int) -> int:
         from linmot_st.bus.stats import bus_stats
         return bus_stats(self.run.trace, self.run.bit_ns, t0, t1).busy_ns
 
     # ------------------------------------------------------------------ words
+    def _group_of(self, node: int) -> "DatasetGroup":
+        """The dataset file this axis was commissioned with (its captions and curve names)."""
+        return next((g for g in self.groups if node in g.nodes), None) or DatasetGroup(
+            self.ctx.pvl_path, self.pvl, self.dataset, [])
+
     def failure_text(self, ax) -> str:
         where = self.item_text(ax)
         what = describe(ax.error_id, ax.abort_code)
         extra = ""
         if ax.fail_kind == "layer" and ax.error_id in (0x0501, 0x0502, 0x0503):
-            src = next((l for l in self.dataset.layers if l[0] == ax.fail_item), None)
+            src = next((l for l in self._group_of(ax.node_id).dataset.layers if l[0] == ax.fail_item), None)
             tid, main, sub = ax.drive_layer
             if src:
                 extra = (f"; the drive has tree ID {tid}, version {main}.{sub}, the dataset tree ID {src[1]}, "
@@ -228,10 +271,11 @@ class Report:
             from linmot_st.pvl import LAYERS
             return f"layer {item} ({LAYERS[item].name})" if item in LAYERS else f"layer {item}"
         if kind == "param":
-            caption = next((p.caption for o in self.pvl.parameter_objects for p in o.parameters if p.upid == item), "")
+            caption = next((p.caption for o in self._group_of(ax.node_id).pvl.parameter_objects for p in o.parameters
+                            if p.upid == item), "")
             return f"UPID {item:04X}h {caption}".rstrip()
         if kind == "curve":
-            c = self.pvl.curve(item)
+            c = self._group_of(ax.node_id).pvl.curve(item)
             name = f" '{c.name}'" if c else ""
             if step == 0:
                 part = "get request (60h)" if verifying else self._first_request(ax, {
@@ -266,7 +310,7 @@ class Report:
     # ------------------------------------------------------------------ text
     def text(self) -> str:
         f = self.figures or self.compute()
-        o, d, run, bus, tr = f["options"], f["dataset"], f["run"], f["bus"], f["transfer"]
+        o, run, bus, tr = f["options"], f["run"], f["bus"], f["transfer"]
         kbit = f"{o['bitrate'] / 1000:g} kbit/s"
         bus_name = ("simulated bus" if o["bus"] == "sim" else o["bus"]) + f" {kbit}"
         lines = [
@@ -274,15 +318,17 @@ class Report:
             f"  {_n(o['axes'], 'axis', 'axes')} (node ID{'s' if o['axes'] > 1 else ''} "
             f"{', '.join(map(str, o['node_ids']))}), {bus_name}, PLC task {o['task_ms']:g} ms, backend {f['backend']} "
             f"({self.ctx.project}, build {'cached' if f['build']['cached'] else f'{self.ctx.build_s:.1f} s'})",
-            f"  dataset: {_n(d['layers'], 'layer')}, {_n(d['parameters'], 'parameter')}, {_n(d['curves'], 'curve')} "
-            f"({_n(d['setpoints'], 'setpoint')}), {_n(d['entries'], 'command-table entry', 'command-table entries')}"
-            f" = {_n(d['words'], 'word')}",
+            *(f"  dataset{'' if len(f['datasets']) == 1 else ' ' + g['name'] + ' (nodes ' + ', '.join(map(str, g['nodes'])) + ')'}: "
+              f"{_n(g['layers'], 'layer')}, {_n(g['parameters'], 'parameter')}, {_n(g['curves'], 'curve')} "
+              f"({_n(g['setpoints'], 'setpoint')}), {_n(g['entries'], 'command-table entry', 'command-table entries')}"
+              f" = {_n(g['words'], 'word')}" for g in f["datasets"]),
             "  options: " + ", ".join(f"{k} {'on' if o[k] else 'off'}" for k in ("live_ram", "flash", "reset", "verify", "preflight", "force"))
             + (f", drive timings {o['drive_timings']}" if o["drive_timings"] else ""),
             "",
         ]
+        mixed = len(f["datasets"]) > 1
         for a in f["axes"]:
-            head = f"node {a['node']}: "
+            head = f"node {a['node']}: " + (f"[{a['dataset']}] " if mixed else "")
             if a["result"] == "done":
                 head += f"commissioned in {a['time_ms']:.1f} ms, {_n(a['exchanges'], 'exchange')}"
             elif a["result"] == "error":
@@ -325,6 +371,9 @@ class Report:
             need = g["necessary_exchanges"]
             lines.append(f"  {title:<22}{g['exchanges']:>10}{'-' if need is None else need:>11}{time_ms:>11.1f}"
                          f"{lb:>11.2f}{_r(ratio):>8}{100 * load:>8.1f} %")
+        if tr.get("ratio_stuffed"):
+            lines.append(f"  transfer phases, stuffed bound (the necessary frames' exact bits, stuff bits included, "
+                         f"back to back): {tr['lower_bound_stuffed_ms']:.2f} ms = {_r(tr['ratio_stuffed'])} x")
         if complete:
             lines.append(f"  (bound of the actual exchanges, flash polls included: transfer phases "
                          f"{tr['lower_bound_actual_ms']:.2f} ms = {_r(tr['ratio_actual'])} x, whole run "
@@ -361,10 +410,10 @@ class Report:
         if f["curves"]:
             lines += ["", "curves read back (the PLC's VERIFY on the bus; else the emulated drive's RAM):"]
             for c in f["curves"]:
-                cv = self.pvl.curve(c["curve"])
                 parts = [f"node {n['node']} {n['verdict']}"
                          + (f" ({n['source']})" if n["source"] and n["source"] != "bus" else "") for n in c["nodes"]]
-                lines.append(f"  curve {c['curve']} '{cv.name}', {_n(c['setpoints'], 'setpoint')}: " + "; ".join(parts))
+                lines.append(f"  {'[' + c['dataset'] + '] ' if mixed else ''}curve {c['curve']} '{c['name']}', "
+                             f"{_n(c['setpoints'], 'setpoint')}: " + "; ".join(parts))
         v = self.verification
         lines += ["", "verification (the emulated drives' memory against the PVL file):" if not v.by_plc
                   else "verification:"]
@@ -437,10 +486,12 @@ class Report:
         trace_name = f"can.{trace_format.lstrip('.')}"
         write_trace(self.run.trace, folder / trace_name)
         files["trace"] = trace_name
-        for c in self.pvl.curves:
-            name = f"curve_{c.curve_id}.png"
-            plot_curve(folder / name, c, self.read_backs[c.curve_id])
-            files["plots"].append(name)
+        for k, g in enumerate(self.groups):
+            for c in g.pvl.curves:
+                # the first file's curves keep their plain names; another file's carry its number
+                name = f"curve_{c.curve_id}.png" if k == 0 else f"curve_{c.curve_id}_dataset{k + 1}.png"
+                plot_curve(folder / name, c, g.read_backs[c.curve_id])
+                files["plots"].append(name)
         files["json"] = "report.json"
         f["files"] = files
         (folder / "report.json").write_text(json.dumps(f, indent=2, default=_json_default) + "\n")
@@ -456,6 +507,31 @@ def _json_default(o):
 
 def _r(x, digits: int = 2) -> str:
     return "-" if x is None else f"{x:.{digits}f}"
+
+
+def stuffed_bound_ns(run: RunResult, phases: tuple[str, ...], necessary: int | None) -> int:
+    """The stuffed bus-time bound of the given phases of every axis: the exact bus bits (stuff bits and
+    interframe space included, `bus_bits`) of the SDO requests and answers each axis exchanged in those
+    phases, back to back. When the axes made more exchanges than `necessary` (retries), the necessary ones
+    are counted at the mean length of the frames seen. 0 when no exchange was seen or the run was
+    incomplete (necessary None)."""
+    if not necessary:
+        return 0
+    windows = {ax.node_id: [(p.t0_ns, p.t1_ns) for p in ax.phases if p.phase in phases] for ax in run.axes}
+    bits = frames = 0
+    for e in run.trace:
+        f = e.frame
+        if e.status == "error" or f.dlc != 8 or f.rtr or not (0x581 <= f.can_id <= 0x67F):
+            continue
+        node = f.can_id & 0x7F
+        if f.can_id - node not in (0x580, 0x600):
+            continue
+        if any(a <= e.start_ns < b for a, b in windows.get(node, ())):
+            bits += bus_bits(f)
+            frames += 1
+    if not frames:
+        return 0
+    return round(bits * min(1.0, 2 * necessary / frames) * run.bit_ns)
 
 
 def _bus_exchanges(trace, node: int, t0: int | None, t1: int | None) -> int:

@@ -169,6 +169,7 @@ class RunResult:
     wear_before: dict = field(default_factory=dict)  # node ID -> drive_wear() when switched on
     wear_after: dict = field(default_factory=dict)   # and at the end of the run
     after: Any = None                          # what run(after=...) returned (the motion job's result)
+    datasets: Any = None                       # datasets.Datasets: each node's PVL and dataset
 
     @property
     def t_start_ns(self) -> int:
@@ -264,16 +265,23 @@ class Sampler:
         return phase_name(vs["phase"].value), vs["items"].value, vs["total"].value
 
 
+def node_id_table(nodes: list[int]) -> list[int]:
+    """plc_project's NodeIds[1..MAX_AXES] for these axes' node IDs (the rest 0: no axis)."""
+    return list(nodes) + [0] * (MAX_AXES - len(nodes))
+
+
 def drive_wear(drive) -> dict:
     """The emulated drive's write counters (docs/emulator.md): flash saves of each store, ROM writes."""
     return dict(flash_curves=drive.flash_cycles["curves"], flash_ct=drive.flash_cycles["ct"],
                 rom_writes=drive.params.rom_writes)
 
 
-def _configure(plc, opts: RunOptions, nodes: list[int], curve_memory: int = 0) -> None:
+def _configure(plc, opts: RunOptions, nodes: list[int], curve_memory: int = 0, bases: list[int] | None = None
+               ) -> None:
     p = INSTANCE
     plc[f"{p}.AXES"] = len(nodes)
-    plc[f"{p}.NODEIDS"] = nodes + [0] * (MAX_AXES - len(nodes))
+    plc[f"{p}.NODEIDS"] = node_id_table(nodes)
+    plc[f"{p}.DATABASES"] = (bases or [1] * len(nodes)) + [1] * (MAX_AXES - len(nodes))
     plc[f"{p}.WAITBOOT"] = opts.emulate            # emulated drives are switched on with the PLC
     plc[f"{p}.LIVERAM"] = opts.live_ram
     plc[f"{p}.FLASH"] = opts.flash
@@ -317,13 +325,25 @@ def default_timeout_s(dataset, opts: RunOptions) -> float:
     return 4e-3 * n + 60.0
 
 
+def run_timeout_s(datasets, nodes: list[int], opts: RunOptions) -> float:
+    """The slowest axis' default_timeout_s, plus 4 x the bus time every axis' exchanges need at the
+    worst-case frame length (135 bits): the axes share one bus, so 32 of them take about 32 x one axis'
+    bus time."""
+    from linmot_st.bus.bits import max_bus_bits
+    from linmot_st.pvl.dataset import expected_exchanges
+    slowest = max(default_timeout_s(datasets.of(n).dataset, opts) for n in nodes)
+    exchanges = sum(expected_exchanges(datasets.of(n).dataset, verify=opts.verify, flash=opts.flash,
+                                       preflight=opts.preflight) for n in nodes)
+    return slowest + 4 * exchanges * 2 * max_bus_bits(8) / opts.bitrate
+
+
 def make_drive(node_id: int, opts: RunOptions):
     from linmot_st.emulator import DriveTimings, E1100Drive
     timings = DriveTimings.fast() if opts.timing_kind() == "fast" else DriveTimings()
     return E1100Drive(node_id, timings=timings)
 
 
-def run(pvl, opts: RunOptions, build_result, *, dataset=None, progress=None,
+def run(pvl, opts: RunOptions, build_result, *, dataset=None, datasets=None, progress=None,
         drive_factory: Callable[[int], Any] | None = None,
         prepare_bus: Callable[[Any, dict], None] | None = None,
         prepare_plc: Callable[[Any], None] | None = None,
@@ -331,22 +351,29 @@ def run(pvl, opts: RunOptions, build_result, *, dataset=None, progress=None,
     """Commission with the PLC of `build_result` (plc_project with this PVL's dataset). `prepare_plc(plc)`
     runs after the program's settings are written and before the first scan (tests: patch the dataset).
     `after(plc, cosim, drives)` runs once every axis is commissioned, on the same PLC, bus and drives, before
-    they are shut down (the motion job: linmot_st.motion); its result is RunResult.after."""
+    they are shut down (the motion job: linmot_st.motion); its result is RunResult.after. `datasets`
+    (datasets.Datasets, built with this PLC's dataset file) gives nodes datasets of their own."""
     from linmot_st.plc import Plc
 
-    from linmot_st.pvl.dataset import from_pvl
+    from .datasets import Datasets, Source
 
     nodes = opts.nodes()
-    dataset = dataset or from_pvl(pvl)
-    timeout_s = opts.timeout_s or default_timeout_s(dataset, opts)
+    if datasets is None:
+        from linmot_st.pvl.dataset import from_pvl
+        datasets = Datasets(Source(pvl, dataset or from_pvl(pvl), getattr(pvl, "filename", None) or "PVL"))
+    timeout_s = opts.timeout_s or run_timeout_s(datasets, nodes, opts)
     plc = Plc(build_result)
     factory = drive_factory or (lambda n: make_drive(n, opts))
+    bases = datasets.bases(nodes)
     if opts.simulated:
-        return _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, timeout_s, after)
-    return _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s, after)
+        res = _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, timeout_s, after, bases)
+    else:
+        res = _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s, after, bases)
+    res.datasets = datasets
+    return res
 
 
-def _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, timeout_s, after) -> RunResult:
+def _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, timeout_s, after, bases) -> RunResult:
     from linmot_st.bus import SimBus
     from linmot_st.cosim import CoSim, CoSimTimeout
 
@@ -364,7 +391,7 @@ def _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, time
     if prepare_bus:
         prepare_bus(bus, drives)
     sim = CoSim(plc, bus, mailbox=MAILBOX, name="plc")
-    _configure(plc, opts, nodes, _curve_memory(opts, drives))
+    _configure(plc, opts, nodes, _curve_memory(opts, drives), bases)
     if prepare_plc:
         prepare_plc(plc)
     sampler = Sampler(plc, nodes, progress)
@@ -422,7 +449,7 @@ class _RecordingBus:
         return msg
 
 
-def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s, after) -> RunResult:
+def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s, after, bases) -> RunResult:
     import os
 
     from linmot_st.bus import open_bus
@@ -463,7 +490,7 @@ def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s, a
         for b, d in zip(drive_buses, drives.values()):
             d.attach(b)                                  # switched on now: boots after its boot time
         sim = RealTimeCoSim(plc, plc_bus, mailbox=MAILBOX, echo=echo)
-        _configure(plc, opts, nodes, _curve_memory(opts, drives))
+        _configure(plc, opts, nodes, _curve_memory(opts, drives), bases)
         if prepare_plc:
             prepare_plc(plc)
         sampler = Sampler(plc, nodes, progress)

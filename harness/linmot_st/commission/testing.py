@@ -8,7 +8,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from .project import REPO, build_project, prepare
+from .project import REPO, TASK_INTERVAL_NS, build_project, parse_task_interval, prepare
 
 EXAMPLE = REPO / "examples" / "two_axes.pvl"
 _builds: dict[str, Any] = {}
@@ -21,14 +21,23 @@ def example():
     return load_pvl(EXAMPLE)
 
 
-def project_build(backend: str = "auto"):
+def project_build(backend: str = "auto", task_interval: str | int | None = None):
     """plc_project with the dataset of examples/two_axes.pvl, built once per backend ("auto": MatIEC when
-    installed, else builtin; COMMISSION_BACKEND=matiec|builtin forces one)."""
+    installed, else builtin; COMMISSION_BACKEND=matiec|builtin forces one) and task interval (ns or a text
+    such as "250us": project.parse_task_interval; None: plc_project's 1 ms)."""
     if backend == "auto":
         backend = os.environ.get("COMMISSION_BACKEND", "auto")
-    if backend not in _builds:
-        _builds[backend] = build_project(prepare(example(), EXAMPLE.name), backend)
-    return _builds[backend]
+    interval_ns = task_interval_ns(task_interval)
+    if (backend, interval_ns) not in _builds:
+        _builds[backend, interval_ns] = build_project(
+            prepare(example(), EXAMPLE.name, task_interval_ns=interval_ns), backend)
+    return _builds[backend, interval_ns]
+
+
+def task_interval_ns(task_interval: str | int | None) -> int:
+    if task_interval is None:
+        return TASK_INTERVAL_NS
+    return parse_task_interval(task_interval) if isinstance(task_interval, str) else int(task_interval)
 
 
 @dataclass
@@ -45,8 +54,8 @@ class Outcome:
 def commission(backend: str = "auto", pvl=None, **kw) -> Outcome:
     """Run the commissioning of `pvl` (default the example) and verify it. Keyword arguments: RunOptions
     fields (timings default "fast", reset default False, force default True: the full write, whose exchanges
-    the tests count; the re-commissioning tests pass force=False), and run()'s hooks drive_factory, prepare_bus,
-    prepare_plc."""
+    the tests count; the re-commissioning tests pass force=False), task_interval (project_build), and run()'s
+    hooks drive_factory, prepare_bus, prepare_plc."""
     from linmot_st.pvl.dataset import from_pvl
     from .report import Context, Report
     from .runner import RunOptions, run
@@ -57,8 +66,9 @@ def commission(backend: str = "auto", pvl=None, **kw) -> Outcome:
     kw.setdefault("timings", "fast")
     kw.setdefault("reset", False)
     kw.setdefault("force", True)
+    task_interval = kw.pop("task_interval", None)
     opts = RunOptions(**kw)
-    res = project_build(backend)
+    res = project_build(backend, task_interval)
     result = run(pvl, opts, res, **hooks)
     verification = verify_run(pvl, result)
     ds = from_pvl(pvl)

@@ -215,5 +215,15 @@ def verify_run(pvl, result) -> Verification:
     early = [a for a in result.axes if a.error and a.fail_phase in BEFORE_WRITES]
     others = {a.node_id for a in result.axes if a not in early}      # another axis on the node may write
     stopped = {a.node_id: a.fail_phase for a in early if a.node_id not in others}
-    return verify(pvl, result.drives if opts.emulate else {}, opts, before=result.before,
-                  stopped_before_writes=stopped)
+    drives = result.drives if opts.emulate else {}
+    datasets = getattr(result, "datasets", None)
+    if datasets is None or datasets.single or not drives:
+        return verify(pvl, drives, opts, before=result.before, stopped_before_writes=stopped)
+    # per-node datasets: each drive against its own PVL file
+    out = Verification()
+    for source in datasets.sources:
+        mine = {n: d for n, d in drives.items() if datasets.of(n) is source}
+        if mine:
+            out.checks += verify(source.pvl, mine, opts, before=result.before, stopped_before_writes=stopped).checks
+    out.checks.sort(key=lambda c: c.node)
+    return out

@@ -50,6 +50,10 @@ def run_command(args: argparse.Namespace) -> int:
     from .report import MotionProgress, MotionReport
 
     err = sys.stderr
+    if args.pvl:
+        from ..cliargs import UsageError
+        raise UsageError("--pvl: the motion job moves every axis with one dataset's curves; per-node datasets "
+                         "are for `linmot-st commission`")
     prep = prepare_run(args, timings=args.drive_timings or "fast")
     if isinstance(prep, int):
         return prep
