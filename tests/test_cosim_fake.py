@@ -284,6 +284,31 @@ def test_real_time_cosim_step_paces_scans():
         assert sim.scans == 11 and plc.time_ns == 55_000_000
 
 
+def test_real_time_cosim_step_one_in_a_loop_keeps_real_time():
+    """step(1) in a caller's loop (the rig's step_until) is paced like one step(11): run flat out, a PLC
+    reached 2 s of its time in 0.3 s of wall time and timed out before the drive had booted."""
+    plc = FakePlc(lambda p: None, tick_ns=5_000_000)
+    with open_bus(f"virtual:linmot-st-test-{uuid.uuid4().hex}") as bus:
+        sim = RealTimeCoSim(plc, bus, mailbox=MB)
+        t0 = time.monotonic()
+        for _ in range(11):
+            sim.step(1)
+        assert time.monotonic() - t0 >= 0.049
+        assert sim.overruns == 0 and plc.time_ns == 55_000_000
+
+
+def test_real_time_cosim_a_caller_holding_the_plc_between_calls_is_no_overrun():
+    plc = FakePlc(lambda p: None, tick_ns=5_000_000)
+    with open_bus(f"virtual:linmot-st-test-{uuid.uuid4().hex}") as bus:
+        sim = RealTimeCoSim(plc, bus, mailbox=MB)
+        sim.step(2)
+        time.sleep(0.03)                                  # the test inspects the PLC for 6 ticks
+        t0 = time.monotonic()
+        sim.step(3)
+        assert time.monotonic() - t0 >= 0.009             # paced anew from the call: 2 ticks after its first
+    assert sim.overruns == 0 and sim.skipped_ticks == 0 and plc.time_ns == 25_000_000
+
+
 def test_real_time_cosim_overrun_moves_the_plc_clock_to_the_wall_clock():
     # the third scan takes 3.5 ticks (the clock jumps while it runs): the next scan starts 2.5 ticks late,
     # at the wall time, so the PLC's clock (its timers, its SDO timeouts) never falls behind real time

@@ -274,6 +274,20 @@ class RealTimeCoSim:
         self.max_lateness_ns = 0
         self.skipped_ticks = 0        # task activations missed by those scans (the PLC clock moved on)
         self._pending: list[Frame] = []
+        # the wall time and PLC time that scan pacing counts from; kept across step()/run_until() calls, so
+        # that step(1) in a caller's loop paces scan after scan as one long call does
+        self._anchor: tuple[int, int] | None = None
+
+    def _paced_from(self, now: int, tick: int) -> tuple[int, int]:
+        """(wall, PLC time) the next scans are due from. A caller that held the PLC between two calls (it
+        inspected, forced, waited: a tick or more) is not an overrun of the PLC's task: pacing starts anew."""
+        plc_now = self.plc.time_ns
+        if self._anchor is not None:
+            wall0, plc0 = self._anchor
+            if plc_now >= plc0 and now - (wall0 + plc_now - plc0) < tick:
+                return self._anchor
+        self._anchor = (now, plc_now)
+        return self._anchor
 
     def _collect(self, until_wall_ns: int) -> int:
         """Receive into the pending frames until the wall clock reaches `until_wall_ns`; returns the wall
@@ -302,8 +316,9 @@ class RealTimeCoSim:
     def _scans(self, n: int | None, predicate: Callable[[], bool] | None, timeout_s: float | None) -> int:
         plc, mb, send = self.plc, self.mailbox, self.can_bus.send
         tick = plc.tick_ns
-        wall0, plc0 = self.clock(), plc.time_ns
-        wall_end = None if timeout_s is None else wall0 + int(timeout_s * 1e9)
+        now = self.clock()
+        wall0, plc0 = self._paced_from(now, tick)
+        wall_end = None if timeout_s is None else now + int(timeout_s * 1e9)
         k = 0
         while n is None or k < n:
             if predicate is not None and predicate():
