@@ -1719,8 +1719,8 @@ class Checker:
                 self.error(args[1].pos, f"N of {name} must be an integer, not {T.describe(nt)}")
             # no BOOL: iec2c accepts SHL(b, 1) but calls SHL__BOOL__BOOL__SINT, which its headers do not define
             return self.tvar(e, sc, [args[0]], lk.fixed, _shiftable,
-                             "BYTE, WORD, DWORD or LWORD (a BOOL builds with iec2c, but MatIEC's C defines no "
-                             "shift or rotate of a BOOL and does not compile)", name)
+                             "a bit string other than BOOL (BYTE, WORD, DWORD or LWORD: iec2c accepts a BOOL, but "
+                             "MatIEC's C defines no shift or rotate of a BOOL and does not compile)", name)
         if n == "SEL":
             self.coerce(args[0], T.BOOL, f"G of {name}")
             return self.tvar(e, sc, args[1:], lk.fixed, _selectable, "an elementary value", name)
