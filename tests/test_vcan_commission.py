@@ -15,7 +15,7 @@ from linmot_st.vcan.testing import Candump, EmulatedDrives, linmot_st, sdo_frame
 pytestmark = pytest.mark.socketcan
 
 # the command's defaults (flash, reset, verify): what `linmot-st commission` does unless told otherwise
-COMMAND_OPTIONS = dict(flash=True, reset=True, verify=True, timings="fast")
+COMMAND_OPTIONS = dict(flash=True, reset=True, verify=True, timings="fast", force=False)   # the CLI's defaults
 
 
 def commission_over(bus: str, *args: str):
