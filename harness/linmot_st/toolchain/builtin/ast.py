@@ -79,6 +79,7 @@ class UnsupportedSpec(Node):
 @dataclass(eq=False)
 class ArrayInit(Node):
     items: list[tuple[int, Node | None]]   # (repeat count, value or None for the default)
+    ints: Any = None                       # a bulkinit.BulkInts instead of items: a long list of plain literals
 
 
 @dataclass(eq=False)

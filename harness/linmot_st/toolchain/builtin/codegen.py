@@ -159,6 +159,9 @@ class CodeGen:
     def value_of(self, init: A.Node, t: T.Type):
         if init is None:
             return self.default_value(t)
+        if isinstance(init, A.ArrayInit) and init.ints is not None:
+            d = self.default_value(t.elem)
+            return list(init.ints.values) + [d] * (t.count - len(init.ints.values))
         if isinstance(init, A.ArrayInit):
             vals = []
             for count, v in init.items:
@@ -196,6 +199,9 @@ class CodeGen:
         if isinstance(tb, T.Array):
             if self.is_zero(v):
                 return "{{0}}"
+            eb = tb.elem.base()
+            if isinstance(eb, T.Elem) and eb.kind in ("uint", "bit") and eb.bits == 32:
+                return "{{" + ",".join([f"{x}U" for x in v]) + "}}"    # the dataset's DWORDs: c_int, fast
             return "{{" + ", ".join(self.c_init(tb.elem, x) for x in v) + "}}"
         if isinstance(tb, T.Struct):
             if self.is_zero(v):
