@@ -21,6 +21,14 @@ GLUE_SOURCES = [GLUE_DIR / "plc_glue.c"]
 
 # -g: the line table lets a fault's address be mapped back to its POU and ST line
 BASE_FLAGS = ["-O1", "-g1", "-fPIC", "-Wno-unused-function", "-fno-strict-aliasing"]
+# Optimisation level by size (docs/toolchain.md). gcc's -O1 grows faster than linearly with the length of
+# one function (its memory-SSA walks over a body that stores through one pointer again and again): one
+# function of 10k ST statements took ~55 s and 400 MB at -O1, ~4 s at -O0; and even cut into short
+# functions, straight-line ST costs -O1 about 1 ms per C line. A unit with a function longer than
+# LONG_FUNCTION_LINES, or longer than LARGE_UNIT_LINES in all, is compiled at -O0. plc_project's units stay
+# far below both (about 10k lines, the longest function a few hundred).
+LONG_FUNCTION_LINES = 4000
+LARGE_UNIT_LINES = 40_000
 # -z defs: a symbol the generated C uses but never defines fails the link, not the later dlopen
 LINK_FLAGS = ["-shared", "-Wl,-z,defs", "-lm", "-ldl", "-lpthread", "-lrt"]   # -lrt: timer_create (glibc < 2.34)
 
@@ -73,6 +81,32 @@ def bounds_trap_flags() -> list[str]:
     return []
 
 
+def longest_function_lines(text: str) -> int:
+    """Lines of the longest top-level brace block of a C text: from a line at column 0 that opens one
+    ('{' alone, or a declaration ending in '{') to the next line that starts with '}'. Both backends
+    write function bodies so."""
+    longest, start = 0, None
+    for i, line in enumerate(text.split("\n")):
+        if start is None:
+            if line[:1] not in ("", " ", "\t", "#", "/", "*", "}") and line.rstrip().endswith("{") or line == "{":
+                start = i
+        elif line[:1] == "}":
+            longest = max(longest, i - start)
+            start = None
+    return longest
+
+
+def size_flags(unit: Path) -> list[str]:
+    """Flags by the unit's size: -O0 for a unit longer than LARGE_UNIT_LINES or with a function longer
+    than LONG_FUNCTION_LINES."""
+    try:
+        text = Path(unit).read_text(errors="replace")
+    except OSError:
+        return []
+    big = text.count("\n") > LARGE_UNIT_LINES or longest_function_lines(text) > LONG_FUNCTION_LINES
+    return ["-O0"] if big else []
+
+
 def compile_shared(units: list[Path], output: Path, *, include_dirs: list[Path] = (),
                    unit_flags: dict[Path, list[str]] | None = None, cwd: Path | None = None,
                    extra_flags: list[str] = ()) -> None:
@@ -83,7 +117,7 @@ def compile_shared(units: list[Path], output: Path, *, include_dirs: list[Path] 
     jobs = []
     for unit in units:
         obj = objdir / (unit.stem + ".o")
-        flags = (unit_flags or {}).get(unit, [])
+        flags = (unit_flags or {}).get(unit, []) + size_flags(unit)
         jobs.append((unit, obj, [*cc, *BASE_FLAGS, *extra_flags, *flags, *incs, "-c", str(unit), "-o", str(obj)]))
 
     def run(job):
