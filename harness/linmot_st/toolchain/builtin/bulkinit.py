@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import re
 from bisect import bisect_right
-from dataclasses import dataclass
 
 from . import ast as A
 
@@ -27,13 +26,22 @@ _OPEN = re.compile(r":=" + _GAP + r"\[")
 _COMMENT = re.compile(r"\(\*[\s\S]*?\*\)")
 
 
-@dataclass
 class BulkInts:
-    """The values of one initialiser read by `extract`; `start` is where its first literal may begin."""
-    values: list[int]
-    start: int
-    text: str
-    lines: "_Lines"
+    """The values of one initialiser read by `extract`; `start` is where its first literal may begin.
+    Equal to another when the values are (the source text and positions are not part of the value)."""
+
+    __slots__ = ("values", "start", "text", "lines")
+
+    def __init__(self, values: list[int], start: int, text: str, lines: "_Lines") -> None:
+        self.values, self.start, self.text, self.lines = values, start, text, lines
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, BulkInts) and other.values == self.values
+
+    __hash__ = None
+
+    def __repr__(self) -> str:
+        return f"BulkInts({len(self.values)} values)"
 
     def items(self, file: str) -> list[tuple[int, A.Node]]:
         """The initialiser as the grammar would have built it: (1, Literal) per value, each at its place."""

@@ -347,7 +347,7 @@ class Checker:
         if isinstance(init, A.ArrayInit) and init.ints is not None:
             if _bulk_fits(init.ints.values, ty):
                 return
-            init.items, init.ints = init.ints.items(init.pos.file), None    # the ordinary checks and messages
+            init.items, init.ints = init.entries(), None    # the ordinary checks and messages
         if isinstance(init, A.ArrayInit):
             if not isinstance(ty, T.Array):
                 self.error(init.pos, f"an array initialiser for a variable of type {T.describe(ty)}")
