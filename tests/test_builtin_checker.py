@@ -218,7 +218,7 @@ def test_user_pou_cannot_redefine_a_standard_block():
 def test_included_files_keep_their_names_and_lines(tmp_path: Path):
     (tmp_path / "lib").mkdir()
     (tmp_path / "lib" / "types.st").write_text("TYPE t_ok : INT; END_TYPE\n")
-    (tmp_path / "lib" / "bad.st").write_text("(* a comment *)\nFUNCTION f : INT\n  f := zz;\nEND_FUNCTION\n")
+    (tmp_path / "lib" / "bad.st").write_text("(* a comment *)\nFUNCTION f : INT VAR_INPUT a : INT; END_VAR\n  f := zz;\nEND_FUNCTION\n")
     entry = tmp_path / "main.st"
     entry.write_text('{#include "lib/types.st"}\n{#include "lib/bad.st"}\nPROGRAM pp\n  VAR i : t_ok; END_VAR\n'
                      '  i := q;\nEND_PROGRAM\n')

@@ -67,13 +67,14 @@ def test_one_axis(backend):
     assert "result: PASSED" in text and "curves                         532     532" in text
 
 
-def test_both_backends_put_the_same_frames_on_the_bus():
+@pytest.mark.parametrize("force", [True, False], ids=["full", "recommission"])
+def test_both_backends_put_the_same_frames_on_the_bus(force):
     from linmot_st.toolchain import builtin_available, matiec_available
     if not (matiec_available() and builtin_available()):
         pytest.skip("needs both MatIEC and the builtin compiler")
     traces = []
     for backend in ("matiec", "builtin"):
-        o = commission(backend, axes=1, verify=False, flash=False)
+        o = commission(backend, axes=1, verify=not force, flash=not force, force=force)
         traces.append([(e.start_ns, e.frame.can_id, e.frame.data) for e in o.result.trace])
     assert traces[0] == traces[1]
 
@@ -176,17 +177,19 @@ def test_reset_then_verify_reads_what_survives_the_restart():
 
 
 def test_the_demo_command(tmp_path, capsys):
-    """`make demo`: two axes with the default options (realistic drive timings, flash, reset, verify)."""
+    """`make demo`'s commissioning as the full write (--force; realistic drive timings, flash, reset, verify): its
+    figures are known from the dataset (the default, re-commissioning: tests/test_commission_recommission.py)."""
     report = tmp_path / "report"
     trace = tmp_path / "run.blf"
     report.mkdir()
     (report / "curve_99.png").write_bytes(b"an earlier report's plot")     # a reused folder
     (report / "can.asc").write_text("an earlier report's trace")
-    assert main(["commission", str(EXAMPLE), "--axes", "2", "--report", str(report), "--trace", str(trace)]) == 0
+    assert main(["commission", str(EXAMPLE), "--axes", "2", "--report", str(report), "--trace", str(trace),
+                 "--force"]) == 0
     out = capsys.readouterr()
     assert "result: PASSED (2 axes commissioned and verified)" in out.out
     assert "node 1   parameters          done: 30 parameters, 30 exchanges, 30 scans" in out.err
-    command = f"linmot-st commission {EXAMPLE} --axes 2 --trace {trace} --report {report}"
+    command = f"linmot-st commission {EXAMPLE} --axes 2 --trace {trace} --report {report} --force"
     assert out.out.splitlines()[0] == command
     names = sorted(p.name for p in report.iterdir())
     assert names == sorted(["report.md", "report.json", "can.log"] +

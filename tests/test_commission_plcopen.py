@@ -19,9 +19,9 @@ from plcopen_checks import (assert_exclusive, check_rising_edge_after_the_pulse,
 
 MS = 1_000_000
 INPUTS = {"EXECUTE": "START", "ABORT": "ABORT", "LIVERAM": "LIVERAM", "FLASH": "FLASH", "RESET": "RESET",
-          "VERIFY": "VERIFY"}
+          "VERIFY": "VERIFY", "FORCE": "A1.FORCE"}
 RUN = dict(FLASH=False, VERIFY=False, RESET=False, LIVERAM=False)   # a short run: check, write (670 exchanges)
-ALT = dict(VERIFY=True, LIVERAM=True, FLASH=True)                   # changed while Busy: must change nothing
+ALT = dict(VERIFY=True, LIVERAM=True, FLASH=True, FORCE=True)       # changed while Busy: must change nothing
 BAD = dict(RESET=True, FLASH=False)                                 # a reset would lose the curves: ResetNeedsFlash
 
 
@@ -101,6 +101,7 @@ def reference_requests() -> list[bytes]:
 def test_done_held_while_execute_then_reset_on_falling_edge():
     b = ComBench()
     fb = b.fb("COM")
+    fb["FORCE"] = True                   # the full write: its exchanges are known from the dataset
     states = run_recording(b, fb, execute_scans=None)
     first = next(i for i, s in enumerate(states) if s[0])
     assert all(s[1] for s in states[:first]), "Busy from the Execute scan until Done"

@@ -10,12 +10,27 @@ import dataclasses
 import pytest
 
 from linmot_st.bus import Frame
-from linmot_st.commission.testing import commission, example
+from linmot_st.commission import testing
+from linmot_st.commission.testing import example
 from linmot_st.emulator import DriveTimings, E1100Drive, load_profile
 
 MS = 1_000_000
 S = 1_000_000_000
 PVL = example()
+MODE = {"force": True}
+
+
+@pytest.fixture(autouse=True, params=[True, False], ids=["full", "recommission"])
+def write_mode(request):
+    """Every test for the full write (Force) and for re-commissioning (the default), which on these new
+    drives finds everything but the defaults different: the same rules must hold after COMPARE."""
+    MODE["force"] = request.param
+    yield request.param
+
+
+def commission(**kw):
+    kw.setdefault("force", MODE["force"])
+    return testing.commission(**kw)
 
 
 def drive_with(profile=None, timings=None, **kw):

@@ -381,14 +381,10 @@ COVERAGE_LIB = """
       VAR_INPUT
         a, b : DINT;
       END_VAR
-      VAR_TEMP
-        t : DINT;
-      END_VAR
       VAR CONSTANT
         K : DINT := 16#10;
       END_VAR
-      t := a + b;
-      F_Add := t + K;
+      F_Add := a + b + K;
     END_FUNCTION
 
     FUNCTION_BLOCK FB_Count
@@ -412,8 +408,12 @@ COVERAGE_LIB = """
       VAR_EXTERNAL
         G_Limit : UDINT;
       END_VAR
+      VAR_TEMP
+        Next : UDINT;
+      END_VAR
       Edge(CLK := Enable);
-      IF Edge.Q AND N < G_Limit THEN
+      Next := N + 1;
+      IF Edge.Q AND Next <= G_Limit THEN
         N := N + 1;
         Total := Total + 1;
       END_IF;
@@ -502,7 +502,7 @@ def test_coverage_library_xml_details(coverage):
     assert itf.find("p:localVars", N).get("retain") == "true"
     assert itf.find("p:externalVars/p:variable", N).get("name") == "G_Limit"
     assert pou["F_Add"].find("p:interface/p:localVars", N).get("constant") == "true"
-    assert pou["F_Add"].find("p:interface/p:tempVars/p:variable", N).get("name") == "t"
+    assert pou["FB_Count"].find("p:interface/p:tempVars/p:variable", N).get("name") == "Next"
     assert pou["P_Main"].find("p:interface/p:localVars/p:variable[@name='Cell']", N).get("address") == "%MW10"
     assert b"Arr[Idx[1]]&gt;0" in data      # not a CDATA section here
     conf = root.find("p:instances/p:configurations/p:configuration", N)

@@ -218,7 +218,7 @@ def test_missing_include_is_a_clear_error(tmp_path):
 def test_library_that_does_not_compile_is_refused(tmp_path):
     entry = make_lib(tmp_path, {"st_lib/linmot.st": """
         FUNCTION F_Bad : INT
-          F_Bad := Undeclared;
+          VAR_INPUT a : INT; END_VAR F_Bad := Undeclared;
         END_FUNCTION
         """})
     with pytest.raises(ExportError, match=r"does not compile:\n.*linmot.st:2:\d+: error: .*Undeclared"):

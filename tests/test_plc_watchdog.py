@@ -70,10 +70,16 @@ def test_normal_scans_never_trip_it_and_zero_turns_it_off(backend, tmp_path):
         plc.watchdog_ns = -1
 
 
+def _sigint_default() -> None:
+    # a test run started in the background (`pytest &` in a script) has SIGINT ignored, and children inherit
+    # that: Python then installs no KeyboardInterrupt handler, and the Ctrl-C under test would never arrive
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _cli(*args: str, **kw) -> subprocess.Popen:
     env = dict(os.environ, PYTHONUNBUFFERED="1")
     return subprocess.Popen([sys.executable, "-m", "linmot_st.cli", *args], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, env=env, **kw)
+                            stderr=subprocess.PIPE, text=True, env=env, preexec_fn=_sigint_default, **kw)
 
 
 def _interrupt(proc: subprocess.Popen, ready: str) -> tuple[str, str, float]:

@@ -45,6 +45,12 @@ def register(subparsers) -> None:
                    help="the PLC reads everything back (default on)")
     p.add_argument("--no-emulate", dest="emulate", action="store_false",
                    help="real drives on a real bus: no emulated drives, no memory verification")
+    p.add_argument("--force", action="store_true",
+                   help="write everything; by default the PLC reads what each drive holds and writes only what "
+                        "differs (no flash save, no reset when nothing does)")
+    p.add_argument("--drive-memory", metavar="DIR",
+                   help="the emulated drives' memory: loaded from DIR/node<N>.json where it exists, written "
+                        "there after the run (a second run finds the drives as the first left them)")
     p.set_defaults(func=run_command)
 
 
@@ -68,6 +74,10 @@ def command_line(args: argparse.Namespace) -> str:
             parts.append(f"--{'' if getattr(args, name) else 'no-'}{name.replace('_', '-')}")
     if not args.emulate:
         parts.append("--no-emulate")
+    if getattr(args, "force", False):
+        parts.append("--force")
+    if getattr(args, "drive_memory", None):
+        parts += ["--drive-memory", args.drive_memory]
     if args.quiet:
         parts.append("-q")
     return " ".join(shlex.quote(x) for x in parts)
@@ -120,7 +130,8 @@ def add_run_arguments(p, *, timings_default: str) -> None:
 
 
 def prepare_run(args: argparse.Namespace, *, flash: bool = True, reset: bool = True, verify: bool = True,
-                live_ram: bool = False, emulate: bool = True, timings: str | None = None) -> Prepared | int:
+                live_ram: bool = False, emulate: bool = True, timings: str | None = None,
+                force: bool = False) -> Prepared | int:
     """Read the PVL file, check the arguments (exit status 2 before anything is built), prepare and build the
     project (1 when that fails)."""
     import time
@@ -139,6 +150,10 @@ def prepare_run(args: argparse.Namespace, *, flash: bool = True, reset: bool = T
         check_output_file(args.trace, f"--trace {args.trace}", (".log", ".asc", ".blf"))
     if args.report:
         check_output_folder(args.report, f"--report {args.report}")
+    if getattr(args, "drive_memory", None):
+        if not emulate:
+            raise UsageError("--drive-memory is the emulated drives' memory: not with --no-emulate")
+        check_output_folder(args.drive_memory, f"--drive-memory {args.drive_memory}")
     pvl = load_or_report(args.file, err)
     if pvl is None:
         return 1
@@ -148,7 +163,7 @@ def prepare_run(args: argparse.Namespace, *, flash: bool = True, reset: bool = T
     opts = RunOptions(axes=axes, node_ids=args.node_ids, bus=args.bus, bitrate=args.bitrate,
                       live_ram=live_ram, flash=flash, reset=reset, verify=verify,
                       preflight=args.preflight, curve_memory=args.curve_memory,
-                      timings=timings, timeout_s=args.timeout, emulate=emulate)
+                      timings=timings, timeout_s=args.timeout, emulate=emulate, force=force)
     try:
         opts.nodes()
         check_bus_spec(opts.bus)
@@ -219,7 +234,7 @@ def run_command(args: argparse.Namespace) -> int:
 
     err = sys.stderr
     prep = prepare_run(args, flash=args.flash, reset=args.reset, verify=args.verify, live_ram=args.live_ram,
-                       emulate=args.emulate, timings=args.drive_timings)
+                       emulate=args.emulate, timings=args.drive_timings, force=args.force)
     if isinstance(prep, int):
         return prep
     if not args.quiet:
@@ -228,7 +243,11 @@ def run_command(args: argparse.Namespace) -> int:
               f"drive(s) on {'the simulated bus' if prep.opts.simulated else prep.opts.bus}", file=err)
     progress = None if args.quiet else Progress(err)
     try:
-        result = run(prep.pvl, prep.opts, prep.build, dataset=prep.dataset, progress=progress)
+        factory = _remembering_drives(args.drive_memory, prep.opts) if args.drive_memory else None
+        result = run(prep.pvl, prep.opts, prep.build, dataset=prep.dataset, progress=progress,
+                     drive_factory=factory)
+        if args.drive_memory:
+            _keep_drives(args.drive_memory, result.drives)
     except (ValueError, OSError) as e:
         error(args, str(e))
         return 2
@@ -240,6 +259,34 @@ def run_command(args: argparse.Namespace) -> int:
     sys.stdout.flush()
     status = 0 if report.figures["result"]["passed"] else 130 if result.interrupted else 1
     return write_outputs(args, report, result) or status
+
+
+def _memory_file(folder: str, node: int):
+    from pathlib import Path
+    return Path(folder) / f"node{node}.json"
+
+
+def _remembering_drives(folder: str, opts):
+    """A drive factory: each emulated drive with the memory a previous run left in `folder` (if any)."""
+    from linmot_st.emulator import memory
+    from .runner import make_drive
+
+    def factory(node: int):
+        drive = make_drive(node, opts)
+        path = _memory_file(folder, node)
+        if path.exists():
+            memory.load(drive, memory.read(path))
+        return drive
+    return factory
+
+
+def _keep_drives(folder: str, drives: dict) -> None:
+    from pathlib import Path
+    from linmot_st.emulator import memory
+
+    Path(folder).mkdir(exist_ok=True)
+    for node, drive in drives.items():
+        memory.write(drive, _memory_file(folder, node))
 
 
 def _rel(path) -> str:

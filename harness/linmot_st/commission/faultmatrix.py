@@ -32,7 +32,7 @@ MS = 1_000_000
 S = 1_000_000_000
 NODE = 1
 
-PHASES = ("check", "preflight", "params", "curves", "ct", "flash", "reset", "verify")
+PHASES = ("check", "compare", "preflight", "params", "curves", "ct", "flash", "reset", "verify")
 FAMILIES = ("lost", "delayed_short", "delayed_long", "duplicated", "corrupted", "wrong_cs", "abort",
             "result_code", "drive_reset", "nmt_reset_comm", "removed", "foreign_node", "execute_dropped",
             "two_instances")
@@ -420,7 +420,7 @@ def run_cell(family: str, phase: str, build=None) -> Cell:
             cell.false_success = not (v.ok and back)
             if cell.false_success:
                 cell.notes += [d for c in v.checks if not c.ok for d in c.differences[:3]]
-        if cell.error and cell.fail_phase in ("wait", "start", "check", "preflight") and present:
+        if cell.error and cell.fail_phase in ("wait", "start", "check", "compare", "preflight") and present:
             cell.wrote_before_writes = drive_state(drive) != before
         if family == "two_instances" and plc["MAIN.A2.COM.ERRORID"] != 0x0208:
             cell.notes.append(f"second instance: ErrorID 16#{plc['MAIN.A2.COM.ERRORID']:04X}, not NodeIdInUse")

@@ -7,9 +7,9 @@ import sys
 import time
 
 BAR = 12
-LABELS = {"start": "start", "check": "compatibility check", "params": "parameters", "curves": "curves",
+LABELS = {"start": "start", "check": "compatibility check", "compare": "compare", "params": "parameters", "curves": "curves",
           "ct": "command table", "flash": "flash save", "reset": "reset", "verify": "verify"}
-UNITS = {"check": "layers", "params": "parameters", "curves": "curves", "ct": "entries",
+UNITS = {"check": "layers", "compare": "items", "params": "parameters", "curves": "curves", "ct": "entries",
          "flash": "services", "reset": "resets", "verify": "items"}
 SINGULAR = {"layers": "layer", "parameters": "parameter", "curves": "curve", "entries": "entry",
             "services": "service", "resets": "reset", "items": "item"}

@@ -28,10 +28,11 @@ from .verify import Verification
 
 SDO_FRAME_BITS = unstuffed_bus_bits(8)      # 111: an SDO request or answer without stuff bits, IFS included
 PHASE_TITLES = {"wait": "waiting for the drive", "start": "start (dataset header)", "check": "compatibility check",
+                "compare": "compare (read drive)",
                 "preflight": "pre-flight check", "params": "parameters", "curves": "curves", "ct": "command table",
                 "flash": "flash save", "reset": "reset + boot", "verify": "verify (read back)"}
 NMT_STATES = {0x00: "none (no heartbeat)", 0x04: "04h stopped", 0x05: "05h operational", 0x7F: "7Fh pre-operational"}
-TRANSFER_PHASES = ("check", "preflight", "params", "curves", "ct", "verify")
+TRANSFER_PHASES = ("check", "compare", "preflight", "params", "curves", "ct", "verify")
 WAIT_PHASES = ("wait", "start", "flash", "reset")      # their time is the drive's own work, not the bus
 
 
@@ -119,12 +120,16 @@ class Report:
                 end_ms=ax.ended_ns / 1e6 if ax.ended_ns is not None else None,
                 time_ms=((ax.ended_ns or 0) - (ax.started_ns or 0)) / 1e6 if ax.ended_ns else None,
                 exchanges=ax.exchanges, exchanges_on_bus=on_bus, live_written=ax.live_written,
+                items=dict(written=ax.written, skipped=ax.skipped, verified=ax.verified),
+                wear=r.wear(ax.node_id),
                 transfer=dict(time_ms=t_ns / 1e6, exchanges=t_ex, lower_bound_ms=lower_bound_ns(t_ex, bit) / 1e6,
                               ratio=t_ns / lower_bound_ns(t_ex, bit) if t_ex else None),
                 phases=phases))
         span = r.t_end_ns - r.t_start_ns
         total_ex = sum(a.exchanges for a in r.axes)
-        complete = r.commissioned
+        # re-commissioning: what a run needs depends on what the drives held, so only the full write has a
+        # necessary count
+        complete = r.commissioned and r.options.force
         # all axes on the one bus: the bound counts the necessary exchanges of every axis (a failed run has
         # no necessary count: its bound counts what it did)
         need = necessary_exchanges(self.dataset, r.options) * len(r.axes) if complete else None
@@ -146,13 +151,14 @@ class Report:
                          entries=len(self.dataset.entries), words=self.dataset.words),
             options=dict(axes=len(r.axes), node_ids=r.node_ids, bus=r.options.bus, bitrate=r.options.bitrate,
                          live_ram=r.options.live_ram, flash=r.options.flash, reset=r.options.reset,
-                         verify=r.options.verify, preflight=r.options.preflight,
+                         verify=r.options.verify, preflight=r.options.preflight, force=r.options.force,
                          drive_timings=r.options.timing_kind() if r.options.emulate else None,
                          task_ms=r.tick_ns / 1e6),
             axes=axes,
             run=dict(start_ms=r.t_start_ns / 1e6, end_ms=r.t_end_ns / 1e6, time_ms=span / 1e6,
-                     exchanges=total_ex, necessary_exchanges=need, scans=r.scans, wall_s=round(r.wall_s, 3),
-                     timed_out=r.timed_out, interrupted=r.interrupted, plc_fault=r.fault,
+                     exchanges=total_ex, necessary_exchanges=need,
+                     items={k: sum(a["items"][k] for a in axes) for k in ("written", "skipped", "verified")}, scans=r.scans, wall_s=round(r.wall_s, 3),
+                     commissioned=r.commissioned, timed_out=r.timed_out, interrupted=r.interrupted, plc_fault=r.fault,
                      overruns=r.overruns, max_lateness_ms=r.max_lateness_ns / 1e6, skipped_ticks=r.skipped_ticks),
             bus=dict(frames=st.frames if st else 0, frames_in_trace=sum(1 for e in r.trace if e.status != "error"),
                      errors=st.errors if st else 0,
@@ -271,7 +277,7 @@ class Report:
             f"  dataset: {_n(d['layers'], 'layer')}, {_n(d['parameters'], 'parameter')}, {_n(d['curves'], 'curve')} "
             f"({_n(d['setpoints'], 'setpoint')}), {_n(d['entries'], 'command-table entry', 'command-table entries')}"
             f" = {_n(d['words'], 'word')}",
-            "  options: " + ", ".join(f"{k} {'on' if o[k] else 'off'}" for k in ("live_ram", "flash", "reset", "verify", "preflight"))
+            "  options: " + ", ".join(f"{k} {'on' if o[k] else 'off'}" for k in ("live_ram", "flash", "reset", "verify", "preflight", "force"))
             + (f", drive timings {o['drive_timings']}" if o["drive_timings"] else ""),
             "",
         ]
@@ -286,6 +292,11 @@ class Report:
             if a["up_ms"] is not None and a["start_ms"] is not None:
                 head += f" (drive up at {a['up_ms']:.1f} ms, started {a['start_ms']:.1f} ms)"
             lines.append(head)
+            it, w = a["items"], a["wear"]
+            lines.append(f"  items: {it['written']} written, {it['skipped']} skipped (the drive held them), "
+                         f"{it['verified']} verified"
+                         + (f"; drive: {w['flash_curves'] + w['flash_ct']} flash save(s) (curves {w['flash_curves']}, "
+                            f"command table {w['flash_ct']}), {w['rom_writes']} ROM write(s)" if w else ""))
             if a["phases"]:
                 lines.append(f"  {'phase':<24}{'exchanges':>10}{'scans':>8}{'time ms':>11}{'bus LB ms':>11}"
                              f"{'x LB':>8}{'scans/exch':>12}")
@@ -318,8 +329,13 @@ class Report:
             lines.append(f"  (bound of the actual exchanges, flash polls included: transfer phases "
                          f"{tr['lower_bound_actual_ms']:.2f} ms = {_r(tr['ratio_actual'])} x, whole run "
                          f"{bus['lower_bound_actual_ms']:.2f} ms = {_r(bus['ratio_actual'])} x)")
+        elif not o["force"] and run["commissioned"]:
+            lines.append("  (re-commissioning: what a run needs depends on what the drives held; the bounds count "
+                         "the exchanges it made)")
         else:
             lines.append("  (the run did not complete: the bounds count the exchanges it made)")
+        it = run["items"]
+        lines.append(f"items, all axes: {it['written']} written, {it['skipped']} skipped, {it['verified']} verified")
         lines += [
             "",
             f"run: {run['time_ms']:.1f} ms of PLC time from the first start ({run['start_ms']:.1f} ms) to the last "

@@ -21,7 +21,7 @@ from linmot_st.cosim import IdlePredicate
 
 from .project import INSTANCE, MAILBOX, MAX_AXES
 
-PHASES = ("idle", "wait", "start", "check", "preflight", "params", "curves", "ct", "flash", "reset", "verify", "done")
+PHASES = ("idle", "wait", "start", "check", "compare", "preflight", "params", "curves", "ct", "flash", "reset", "verify", "done")
 
 
 def phase_name(enum_value: str) -> str:
@@ -56,6 +56,7 @@ class RunOptions:
     reset: bool = True
     verify: bool = True
     preflight: bool = True                     # the FB asks each drive whether it can take the dataset first
+    force: bool = False                        # write everything (Force); default: only what differs
     curve_memory: int | None = None            # bytes of curve memory (CurveMemory); None: the emulated
                                                # drive's capacity, 0 with real drives (not checked)
     timings: str | None = None                 # "real" | "fast"; default real on sim, fast on real-time buses
@@ -118,6 +119,9 @@ class AxisResult:
     drive_layer: tuple[int, int, int] = (0, 0, 0)
     exchanges: int = 0
     live_written: int = 0
+    written: int = 0                           # items written, skipped (the drive held them), read back equal
+    skipped: int = 0
+    verified: int = 0
     mc_stopped: bool = False                   # the run left the drive's MC stopped (McStopped)
     fail_delay_ns: int = 0                     # from the failure to its report (the MC restart; FailDelay)
     up_ns: int | None = None                   # when the PLC first heard the drive
@@ -166,6 +170,8 @@ class RunResult:
     skipped_ticks: int = 0                     # real time: task activations late scans missed (cosim.py)
     stats: Any = None                          # BusStats over the commissioning span
     before: dict = field(default_factory=dict)  # node ID -> verify.drive_state() when switched on
+    wear_before: dict = field(default_factory=dict)  # node ID -> drive_wear() when switched on
+    wear_after: dict = field(default_factory=dict)   # and at the end of the run
     after: Any = None                          # what run(after=...) returned (the motion job's result)
 
     @property
@@ -177,6 +183,13 @@ class RunResult:
     def t_end_ns(self) -> int:
         ends = [a.phases[-1].t1_ns for a in self.axes if a.phases]
         return max(ends) if ends else self.t_start_ns
+
+    def wear(self, node: int) -> dict | None:
+        """What the run cost the emulated drive's non-volatile memory: flash saves per store, ROM writes."""
+        if node not in self.wear_before or node not in self.wear_after:
+            return None
+        now, then = self.wear_after[node], self.wear_before[node]
+        return {k: now[k] - then[k] for k in now}
 
     @property
     def commissioned(self) -> bool:
@@ -257,6 +270,12 @@ class Sampler(IdlePredicate):
         return phase_name(vs["phase"].value), vs["items"].value, vs["total"].value
 
 
+def drive_wear(drive) -> dict:
+    """The emulated drive's write counters (docs/emulator.md): flash saves of each store, ROM writes."""
+    return dict(flash_curves=drive.flash_cycles["curves"], flash_ct=drive.flash_cycles["ct"],
+                rom_writes=drive.params.rom_writes)
+
+
 def _configure(plc, opts: RunOptions, nodes: list[int], curve_memory: int = 0) -> None:
     p = INSTANCE
     plc[f"{p}.AXES"] = len(nodes)
@@ -268,6 +287,8 @@ def _configure(plc, opts: RunOptions, nodes: list[int], curve_memory: int = 0) -
     plc[f"{p}.VERIFY"] = opts.verify
     plc[f"{p}.PREFLIGHT"] = opts.preflight
     plc[f"{p}.CURVEMEMORY"] = curve_memory
+    for k in range(1, len(nodes) + 1):
+        plc[f"{p}.A{k}.FORCE"] = opts.force        # an input of each axis (FB_PlcAxis), not of the program
     plc[f"{p}.START"] = True
 
 
@@ -282,6 +303,7 @@ def _collect(plc, sampler: Sampler) -> None:
         dl = c["DRIVELAYER"]
         ax.drive_layer = (dl["TREEID"], dl["MAINVERSION"], dl["SUBVERSION"])
         ax.exchanges, ax.live_written = c["EXCHANGES"], c["LIVEWRITTEN"]
+        ax.written, ax.skipped, ax.verified = c["WRITTEN"], c["SKIPPED"], c["VERIFIED"]
         ax.mc_stopped, ax.fail_delay_ns = bool(c["MCSTOPPED"]), c["FAILDELAY"]
 
 
@@ -344,6 +366,7 @@ def _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, time
         d.power_on(0)
         drives[n] = d
     before = {n: drive_state(d) for n, d in drives.items()}
+    wear_before = {n: drive_wear(d) for n, d in drives.items()}
     if prepare_bus:
         prepare_bus(bus, drives)
     sim = CoSim(plc, bus, mailbox=MAILBOX, name="plc", fast_idle=opts.fast_idle)
@@ -369,7 +392,8 @@ def _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, time
     after_result = after(plc, sim, drives) if after is not None and commissioned else None
     res = RunResult(opts, nodes, plc.tick_ns, bus.bit_ns, sampler.axes, list(bus.trace), drives,
                     scans=sim.scans, wall_s=wall, timed_out=timed_out, fault=fault, before=before,
-                    interrupted=interrupted, after=after_result)
+                    interrupted=interrupted, after=after_result, wear_before=wear_before,
+                    wear_after={n: drive_wear(d) for n, d in drives.items()})
     res.stats = bus.stats(res.t_start_ns, max(res.t_end_ns, res.t_start_ns))
     return res
 
@@ -434,6 +458,7 @@ def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s, a
                 drive_buses.append(opened())
                 drives[n] = factory(n)
         before = {n: drive_state(d) for n, d in drives.items()}
+        wear_before = {n: drive_wear(d) for n, d in drives.items()}
         # the PLC's own frames come back once sent: the mailbox's transmit confirmation (TxEcho), where
         # the interface can give them
         try:
@@ -477,6 +502,7 @@ def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s, a
     res = RunResult(opts, nodes, plc.tick_ns, bit_ns, sampler.axes, trace, drives, scans=sim.scans,
                     wall_s=wall, timed_out=timed_out, fault=fault, overruns=sim.overruns,
                     max_lateness_ns=sim.max_lateness_ns, skipped_ticks=sim.skipped_ticks, before=before,
-                    interrupted=interrupted, after=after_result)
+                    interrupted=interrupted, after=after_result, wear_before=wear_before,
+                    wear_after={n: drive_wear(d) for n, d in drives.items()})
     res.stats = bus_stats(trace, bit_ns, res.t_start_ns, max(res.t_end_ns, res.t_start_ns))
     return res

@@ -44,7 +44,8 @@ class Outcome:
 
 def commission(backend: str = "auto", pvl=None, **kw) -> Outcome:
     """Run the commissioning of `pvl` (default the example) and verify it. Keyword arguments: RunOptions
-    fields (timings default "fast", reset default False), and run()'s hooks drive_factory, prepare_bus,
+    fields (timings default "fast", reset default False, force default True: the full write, whose exchanges
+    the tests count; the re-commissioning tests pass force=False), and run()'s hooks drive_factory, prepare_bus,
     prepare_plc."""
     from linmot_st.pvl.dataset import from_pvl
     from .report import Context, Report
@@ -55,6 +56,7 @@ def commission(backend: str = "auto", pvl=None, **kw) -> Outcome:
     hooks = {k: kw.pop(k) for k in ("drive_factory", "prepare_bus", "prepare_plc", "progress") if k in kw}
     kw.setdefault("timings", "fast")
     kw.setdefault("reset", False)
+    kw.setdefault("force", True)
     opts = RunOptions(**kw)
     res = project_build(backend)
     result = run(pvl, opts, res, **hooks)

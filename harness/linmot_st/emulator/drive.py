@@ -96,6 +96,8 @@ class E1100Drive:
         self.params = ParameterStore(self.profile.all_definitions())
         self.curves = CurveStore(curve_capacity_bytes)
         self.ct = CommandTable()
+        # a real drive's flash has limited write cycles: every completed save of a store counts one
+        self.flash_cycles = {"curves": 0, "ct": 0}
         self.errlog = error_log or ErrorLog()
         self.motion = motion or MotionSettings()
         self.mc = MotionControl(self.motion, self.timings.hw_test_ns, self.params, self.curves, self.ct,
@@ -428,6 +430,7 @@ class E1100Drive:
 
         def done(te):
             store.commit_to_flash()
+            self.flash_cycles[what] += 1
             self._flash_busy = None
         self._at(self.now_ns + self.timings.flash_base_ns + kib * self.timings.flash_per_kib_ns, done)
         return codes.RC_OK

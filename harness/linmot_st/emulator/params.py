@@ -67,6 +67,7 @@ class ParameterStore:
         self._order = sorted(self._p)
         self._strings = {d.upid: d for d in definitions if d.kind == "string"}
         self.live: Callable[[int], int | None] | None = None   # the drive's variables now (the MC's provider)
+        self.rom_writes = 0                     # ROM writes over the bus (02h, 06h), kept across boots
 
     # ---- lookup ----
     def __getitem__(self, upid: int) -> Parameter:
@@ -149,6 +150,7 @@ class ParameterStore:
             p.ram = value
         if rom:
             p.rom = value
+            self.rom_writes += 1            # the parameter store is non-volatile too: writes are counted
 
     def set_variable(self, upid: int, value: int) -> None:
         """The drive's own update of a variable (status word, state var...)."""

@@ -462,6 +462,10 @@ class RealTimeRig(Rig):
         self.drives, self._buses = {}, []
         self.watched, self.faults, self._armed = list(watch), [], []
         try:
+            # the PLC's side first: a python-can bus receives only what is sent after it opened, and an
+            # attached drive boots at once (fast timings: 20 ms), so its boot-up must find the PLC listening
+            self.can = _RecordingBus(open_bus(bus, bitrate=bitrate), time.monotonic_ns(), 1_000_000_000 // bitrate)
+            self._buses.append(self.can.bus)
             if emulate:
                 for n in nodes:
                     drive_bus = open_bus(bus, bitrate=bitrate)
@@ -470,8 +474,6 @@ class RealTimeRig(Rig):
                         n, profile, timings=_timings(timings), protocol=protocol)
                     drive.attach(drive_bus)
                     self.drives[n] = drive
-            self.can = _RecordingBus(open_bus(bus, bitrate=bitrate), time.monotonic_ns(), 1_000_000_000 // bitrate)
-            self._buses.append(self.can.bus)
         except BaseException:
             self.close()
             raise

@@ -261,11 +261,19 @@ def _internal(exc: BaseException, backend: str, src: _sources.Sources) -> Intern
         backend)
 
 
-_MISSING_WRAPPER = re.compile(r"implicit declaration of function .__\w+?\d+.")
+# a global's accessor (__GET_GLOBAL_X, declared by the CONFIGURATION's VAR_GLOBAL X) is no call wrapper
+_MISSING_GLOBAL = re.compile(r"implicit declaration of function .__GET_GLOBAL_(\w+).")
+_MISSING_WRAPPER = re.compile(r"implicit declaration of function .__(?!GET_GLOBAL_)\w+?\d+.")
 
 
 def _explain_matiec_c_errors(diags: list[str]) -> list[str]:
     """Add what is known about MatIEC defects that surface as C errors."""
+    missing = sorted({m[1] for d in diags for m in [_MISSING_GLOBAL.search(d)] if m})
+    if missing:
+        diags = diags + [
+            f"note: no VAR_GLOBAL {', '.join(missing)} in the CONFIGURATION (or no CONFIGURATION at all) for a "
+            "VAR_EXTERNAL of that name: iec2c accepts such a VAR_EXTERNAL, but its C then calls __GET_GLOBAL_<name>, "
+            "which only the global's declaration provides. Declare the global in the CONFIGURATION built with it."]
     if any(_MISSING_WRAPPER.search(d) for d in diags):
         diags = diags + [
             "note: iec2c used a call wrapper it never defined (MatIEC defect: inside a FUNCTION_BLOCK, a "

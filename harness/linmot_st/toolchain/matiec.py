@@ -312,23 +312,27 @@ def parse_roots(out_dir: Path, generated: list[Path], ctypes_: CTypes) -> tuple[
                 programs[row[1].strip().upper()] = row[2].strip().upper()
             elif section == "ticktime":
                 tick_ns = int(row[0])
-    for path, ptype in programs.items():   # CONFIG0.RES0.INST0 -> RES0__INST0, Beremiz's rule
+    units = [u for u in generated if u.suffix == ".c" and u.name != "POUS.c"]
+    texts = {u: _LINE_DIRECTIVE.sub("", u.read_text()) for u in units}
+    # program instances as the resource units define them: `MAIN RES0__INST0;`
+    instances = {f"{domain}__{name}": (ctype, domain, name) for u in units if u not in configs
+                 for ctype, domain, name in _INSTANCE.findall(texts[u]) if ctype in ctypes_.pous}
+    for path, ptype in programs.items():
         parts = path.split(".")
-        roots.append(Root(path, "__".join(parts[1:]), "PROGRAM", ptype))
-    for unit in generated:
-        if unit.suffix != ".c" or unit.name == "POUS.c":
-            continue
-        text = _LINE_DIRECTIVE.sub("", unit.read_text())
+        if len(parts) == 2:   # a CONFIGURATION without RESOURCE: iec2c's C still has one (RESOURCE__INST0)
+            cname = next((c for c, (_, _, name) in instances.items() if name.upper() == parts[1]), parts[1])
+        else:                 # CONFIG0.RES0.INST0 -> RES0__INST0, Beremiz's rule
+            cname = "__".join(parts[1:])
+        roots.append(Root(path, cname, "PROGRAM", ptype))
+    for unit in units:
         is_config = unit in configs
-        for how, ctype, domain, name in _GLOBAL.findall(text):
+        for how, ctype, domain, name in _GLOBAL.findall(texts[unit]):
             scope = config_name if is_config else f"{config_name}.{domain.upper()}"
             roots.append(Root(f"{scope}.{name}", f"{domain}__{name}", "GLOBAL" + how, ctype, scope, name))
-        if not is_config:   # program instances also appear as `MAIN RES0__INST0;`
-            for ctype, domain, name in _INSTANCE.findall(text):
-                path = f"{config_name}.{domain}.{name}".upper()
-                if ctype in ctypes_.pous and path not in programs:
-                    roots.append(Root(path, f"{domain}__{name}", "PROGRAM", ctype))
-                    programs[path] = ctype
+    found = {r.cname for r in roots}
+    for cname, (ctype, domain, name) in instances.items():   # those VARIABLES.csv does not list
+        if cname not in found:
+            roots.append(Root(f"{config_name}.{domain}.{name}".upper(), cname, "PROGRAM", ctype))
     located = out_dir / "LOCATED_VARIABLES.h"
     if located.is_file():
         for ctype, cname, direction, size, loc in _LOCATED.findall(located.read_text()):

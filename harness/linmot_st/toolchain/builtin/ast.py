@@ -149,6 +149,7 @@ class Resource(Node):
     globals: list[VarBlock]
     tasks: list[TaskDecl]
     programs: list[ProgramConfig]
+    implicit: bool = False     # tasks and programs written directly in the CONFIGURATION (no RESOURCE)
 
 
 @dataclass(eq=False)

@@ -17,10 +17,11 @@ import re
 from pathlib import Path
 
 from . import ast as A
-from . import nesting, stdfb
+from . import constfold, matiec_c_macros, nesting, stdfb
 from . import stdfuncs as SF
 from . import types as T
 from .errors import BuiltinCompileError, Diagnostic
+from .parser import C_PRAGMA, is_c_pragma
 from .symbols import ConfigSym, LocatedCell, PouSym, ProgInst, Program, ResourceSym, TaskSym, Var
 
 KEYWORDS = {
@@ -37,6 +38,14 @@ KEYWORDS = {
 }
 # parameters MatIEC accepts as identifiers although they look reserved
 NOT_RESERVED = {"Q", "IN", "PT", "PRIORITY", "INTERVAL", "SINGLE"}
+# words the builtin knows only to explain them (types and object-oriented constructs outside the subset)
+# that iec2c, with the build's flags (no -r), reads as ordinary identifiers: it builds them as the name of
+# a variable, field, POU, type, enumerated value, task, resource or instance (tests/test_builtin_matiec_names.py)
+MATIEC_IDENTIFIERS = {
+    "CHAR", "WCHAR", "LTIME", "LDATE", "LTOD", "LDT", "LTIME_OF_DAY", "LDATE_AND_TIME",
+    "METHOD", "END_METHOD", "INTERFACE", "END_INTERFACE", "EXTENDS", "IMPLEMENTS", "THIS", "SUPER",
+    "POINTER", "REFERENCE", "REF_TO",
+}
 # functions outside the subset that people reach for: a clear message instead of "unknown function"
 UNSUPPORTED_FUNCTIONS = {
     "SIZEOF": "SIZEOF", "ADR": "ADR", "REF": "REF()", "LOWER_BOUND": "LOWER_BOUND", "UPPER_BOUND": "UPPER_BOUND",
@@ -51,6 +60,17 @@ def matiec_library_names() -> frozenset[str]:
     data = json.loads((Path(__file__).with_name("matiec_lib_names.json")).read_text())
     return frozenset(data["names"])
 
+
+# what iec2c writes into its C under the ST name itself (enumerated values, program instances, resources, the
+# configuration and its globals get a prefix there): these cannot take a C macro's name. A global's VAR_EXTERNAL
+# is a variable, so only a global that no POU uses can be named so
+C_NAMED = {"variable", "field", "type", "function", "function block", "program", "task"}
+
+# MatIEC's library declares these blocks beyond IEC's (stdfb.NON_STANDARD), and iec2c knows their names before
+# it reads the user's code: as a user's identifier each is a syntax error (or an internal error of iec2c)
+NON_STANDARD_NAME = ("'{name}' cannot name {what}: it is the name of a function block of MatIEC's own library "
+                     "(not an IEC standard block, and not provided by the builtin compiler), which iec2c refuses "
+                     "as an identifier; choose another name")
 
 FLT_MAX, FLT_MIN = 3.4028234663852886e38, 1.1754943508222875e-38
 
@@ -107,8 +127,11 @@ class Checker:
         self.for_vars: list[Var] = []       # control variables of the FOR loops around the statement
         self.anon = 0
         self._std_ast: dict[str, A.Pou] | None = None
+        self.folder = constfold.Folder()
         self._std_mode = False
         self.config_names: set[str] = set()
+        self.externals_reported: set[Var] = set()   # VAR_EXTERNALs already reported as without a global
+        self.failed_tasks: set[str] = set()  # tasks whose declaration was rejected: uses are not reported
         self.failed_pous: set[str] = set()   # POUs whose declaration was rejected: uses are not reported
         self.code_generation = True          # off between {disable code generation} and {enable ...}
 
@@ -142,12 +165,16 @@ class Checker:
                     self.code_generation = False
                 elif isinstance(el, A.Pragma) and ENABLE_CODE.fullmatch(el.text):
                     self.code_generation = True
+                elif isinstance(el, A.Pragma) and is_c_pragma(el.text):
+                    self.error(el.pos, C_PRAGMA)
                 elif isinstance(el, A.Pragma):
                     self.error(el.pos, f"pragma {el.text!r} is outside the supported subset (only "
                                        "{#include \"file\"}, {disable code generation} and {enable code generation} "
                                        "are supported)")
             except _Abort:
                 pass
+        if self.config is not None or not self.config_names:    # (a rejected CONFIGURATION declares nothing)
+            self.check_externals_declared()
         if self.diags:
             raise BuiltinCompileError(self.diags)
         return Program(self.type_order, list(self.pous.values()), self.config, self.located, files)
@@ -159,10 +186,20 @@ class Checker:
             self.error(pos, f"identifier '{name}' contains a double underscore, which MatIEC rejects")
         if k in NOT_RESERVED:
             return k
-        if k in KEYWORDS or k in T.ELEMENTARY or k in T.ELEMENTARY_ALIASES or k in T.UNSUPPORTED_ELEMENTARY:
+        reserved = k in KEYWORDS or k in T.ELEMENTARY or k in T.ELEMENTARY_ALIASES or k in T.UNSUPPORTED_ELEMENTARY
+        if reserved and k not in MATIEC_IDENTIFIERS:
             self.error(pos, f"'{name}' is a reserved word and cannot name a {what}")
-        if SF.is_std_function(k) or k in SF.MISSING_IN_MATIEC_C:
+        if (SF.is_std_function(k) or k in SF.MISSING_IN_MATIEC_C) and not (what == "function" and k in SF.USER_NAMEABLE):
             self.error(pos, f"'{name}' is the name of a standard function and cannot name a {what}")
+        if k in stdfb.NON_STANDARD and what != "field" and not self._std_mode:
+            self.error(pos, NON_STANDARD_NAME.format(name=name, what=_a(what)))
+        if k in stdfb.names() and what != "field" and not self._std_mode:
+            self.error(pos, f"'{name}' is the name of a standard function block and cannot name {_a(what)} (MatIEC "
+                            "refuses it: iec2c reads the name as the block's)")
+        if k in matiec_c_macros.names() and what in C_NAMED and not self._std_mode:
+            self.error(pos, f"'{name}' cannot name {_a(what)}: it is a C macro of the headers MatIEC's generated C "
+                            f"includes, and iec2c writes the name into that C as it is ({k}), where the preprocessor "
+                            "replaces it and the C does not compile; choose another name")
         if k in self.config_names and what != "configuration" and not self._std_mode:
             self.error(pos, f"'{name}' is the name of the CONFIGURATION and cannot name a {what} (MatIEC rejects "
                             "it: with -p, iec2c knows the configuration's name before it reads the POUs)")
@@ -178,8 +215,6 @@ class Checker:
             self.error(pos, f"'{name}' is already declared as a type")
         if k in self.pous:
             self.error(pos, f"'{name}' is already declared as a {self.pous[k].kind}")
-        if k in stdfb.names() and not self._std_mode:
-            self.error(pos, f"'{name}' is the name of a standard function block")
         return k
 
     # ------------------------------------------------------------------ types
@@ -472,7 +507,16 @@ class Checker:
 
     # ------------------------------------------------------------------ POUs
     def declare_pou(self, node: A.Pou) -> None:
-        k = self.check_global_name(node.name, node.pos, node.kind.lower().replace("_", " "))
+        try:
+            k = self.check_global_name(node.name, node.pos, node.kind.lower().replace("_", " "))
+            if not node.blocks and not node.std:
+                self.error(node.pos, f"{node.kind} {node.name} declares no variables: MatIEC's grammar needs at "
+                                     "least one VAR... END_VAR block in every POU (iec2c refuses it with a syntax "
+                                     "error)")
+        except _Abort:
+            if node.name.upper() not in self.pous:     # a duplicate leaves the first declaration usable
+                self.failed_pous.add(node.name.upper())
+            raise
         pou = PouSym(node.name, k, node.kind, node.pos, node, std=node.std,
                      no_code=not self.code_generation and not node.std)
         if node.kind != "FUNCTION":
@@ -522,12 +566,18 @@ class Checker:
     def declare_block(self, pou: PouSym, block: A.VarBlock) -> None:
         kind, qual = block.kind, block.qualifier
         allowed = {
-            "FUNCTION": {"VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_TEMP"},
+            "FUNCTION": {"VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT"},
             "FUNCTION_BLOCK": {"VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_TEMP", "VAR_EXTERNAL"},
             "PROGRAM": {"VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_TEMP", "VAR_EXTERNAL"},
         }[pou.kind]
+        if kind == "VAR_TEMP" and pou.kind == "FUNCTION":
+            kind = "VAR"     # declared all the same, so that their uses add no "not declared"
+            self.report(block.pos, "VAR_TEMP is not allowed in a FUNCTION: MatIEC refuses it (its grammar has no "
+                                  "VAR_TEMP in a FUNCTION, whose VAR variables are temporary anyway); use VAR")
         if kind not in allowed:
             self.error(block.pos, f"{kind} is not allowed in a {pou.kind} (outside the supported subset)")
+        if not pou.std:
+            self.check_not_empty(block)
         if qual == "CONSTANT" and kind not in ("VAR", "VAR_EXTERNAL"):
             self.error(block.pos, f"{kind} CONSTANT is outside the supported subset")
         if qual == "PERSISTENT":
@@ -540,6 +590,11 @@ class Checker:
                 self.declare_var(pou, kind, qual, decl)
             except _Abort:
                 pass
+
+    def check_not_empty(self, block: A.VarBlock) -> None:
+        if not block.decls:
+            self.error(block.pos, f"an empty {block.kind} ... END_VAR block: MatIEC refuses a block that declares no "
+                                  "variable ('no variable declared'); remove it")
 
     def declare_var(self, pou: PouSym | None, kind: str, qual: str | None, decl: A.VarDecl,
                     scope=None, table: dict | None = None) -> list[Var]:
@@ -606,13 +661,16 @@ class Checker:
             self.const_value(decl.init, ty)
         out = []
         for name, pos in decl.names:
-            k = self.check_identifier(name, pos, "variable")
+            k = self.check_identifier(name, pos, "variable" if pou is not None else "global variable")
             if k in ("EN", "ENO"):
                 self.error(pos, f"'{name}' is reserved (implicit parameter of every POU)")
             if k in self.types:
                 self.error(pos, f"variable '{name}' has the name of a type (MatIEC rejects this)")
-            if k in self.pous or (k in stdfb.names() and not self._std_mode):
+            if k in self.pous:
                 self.error(pos, f"variable '{name}' has the name of a POU (MatIEC rejects this)")
+            if pou is not None and pou.result is None and k == pou.key:
+                self.error(pos, f"variable '{name}' has the name of its own {pou.kind}: MatIEC refuses it (iec2c "
+                                "reads the name as the POU's, reports a syntax error, and may then crash)")
             if k in table or (pou is not None and pou.result is not None and k == pou.key):
                 self.error(pos, f"duplicate declaration of '{name}'")
             v = Var(name, k, ty, kind, pos, constant=(qual == "CONSTANT"), init=decl.init,
@@ -662,17 +720,17 @@ class Checker:
         for block in node.globals:
             self.declare_globals(block, cfg, cfg.globals)
         if not node.resources:
-            self.error(node.pos, "a CONFIGURATION needs at least one RESOURCE")
+            self.error(node.pos, "a CONFIGURATION needs at least one RESOURCE, or at least one PROGRAM instance")
         resource_names = {r.name.upper(): r for r in node.resources}
         for g in cfg.globals.values():
             if g.key in resource_names:
                 self.report(g.pos, f"global '{g.name}' has the name of resource {resource_names[g.key].name} "
                                    "(MatIEC rejects it)")
         for rnode in node.resources:
-            rk = self.check_identifier(rnode.name, rnode.pos, "resource")
+            rk = rnode.name.upper() if rnode.implicit else self.check_identifier(rnode.name, rnode.pos, "resource")
             if any(r.key == rk for r in cfg.resources):
                 self.error(rnode.pos, f"duplicate resource '{rnode.name}'")
-            res = ResourceSym(rnode.name, rk, rnode.pos, config=cfg)
+            res = ResourceSym(rnode.name, rk, rnode.pos, config=cfg, implicit=rnode.implicit)
             for block in rnode.globals:
                 self.declare_globals(block, res, res.globals)
             for g in res.globals.values():
@@ -683,7 +741,7 @@ class Checker:
                 try:
                     res.tasks.append(self.declare_task(tnode, res))
                 except _Abort:
-                    pass
+                    self.failed_tasks.add(tnode.name.upper())
             for pnode in rnode.programs:
                 try:
                     res.programs.append(self.declare_program_instance(pnode, res))
@@ -693,13 +751,14 @@ class Checker:
                 if g.is_fb_instance:
                     self.check_externals(g.ty.pou, res, g.pos, set())
             cfg.resources.append(res)
-        if not any(t.interval_ns for r in cfg.resources for t in r.tasks):
+        if not any(t.interval_ns for r in cfg.resources for t in r.tasks) and not self.failed_tasks:
             self.report(node.pos, "at least one periodic TASK (with an INTERVAL) is required (MatIEC)")
         self.config = cfg
 
     def declare_globals(self, block: A.VarBlock, scope, table: dict) -> None:
         if block.kind != "VAR_GLOBAL":
             self.error(block.pos, f"{block.kind} is not allowed here (only VAR_GLOBAL)")
+        self.check_not_empty(block)
         located = [d for d in block.decls if d.location]
         if located and len(located) != len(block.decls):
             self.error(block.pos, "located variables must be declared in a VAR_GLOBAL block of their own (MatIEC)")
@@ -739,19 +798,23 @@ class Checker:
     def declare_program_instance(self, node: A.ProgramConfig, res: ResourceSym) -> ProgInst:
         k = self.check_identifier(node.name, node.pos, "program instance")
         if any(p.key == k for p in res.programs) or k in res.globals:
-            self.error(node.pos, f"duplicate name '{node.name}' in resource {res.name}")
+            self.error(node.pos, f"duplicate name '{node.name}' in {res.described}")
         if k in res.config.globals:
             self.error(node.pos, f"program instance '{node.name}' has the name of a global of the configuration "
                                  "(MatIEC rejects it)")
         if any(r.key == k for r in res.config.resources) or k == res.key:
             self.error(node.pos, f"program instance '{node.name}' has the name of a resource (MatIEC rejects it)")
         pou = self.pous.get(node.type_name.upper())
+        if pou is None and node.type_name.upper() in self.failed_pous:
+            raise _Abort     # its declaration was rejected, and reported
         if pou is None or pou.kind != "PROGRAM":
             self.error(node.type_pos, f"'{node.type_name}' is not a PROGRAM declared before the configuration")
         self.check_has_code(pou, node.type_pos)
         task = None
         if node.task:
             task = next((t for t in res.tasks if t.key == node.task.upper()), None)
+            if task is None and node.task.upper() in self.failed_tasks:
+                raise _Abort     # its declaration was rejected, and reported
             if task is None:
                 self.error(node.pos, f"unknown task '{node.task}'")
         if node.bindings:
@@ -778,7 +841,8 @@ class Checker:
             g = self.resolve_global(res, ext.key)
             where = f" (used by {pou.name})"
             if g is None:
-                self.report(pos, f"VAR_EXTERNAL '{ext.name}' of {pou.name} has no VAR_GLOBAL in resource {res.name}")
+                self.report(pos, f"VAR_EXTERNAL '{ext.name}' of {pou.name} has no VAR_GLOBAL in {res.described}")
+                self.externals_reported.add(ext)
                 continue
             if T.ERROR in (g.ty, ext.ty):
                 continue
@@ -792,6 +856,26 @@ class Checker:
         for v in pou.vars.values():
             if v.kind in ("VAR_INPUT", "VAR_IN_OUT") and v.is_fb_instance:
                 self.check_externals(v.ty.pou, res, pos, seen)
+
+    def check_externals_declared(self) -> None:
+        """Every VAR_EXTERNAL of a POU that gets C needs a VAR_GLOBAL of that name somewhere in the CONFIGURATION:
+        iec2c accepts one without, but its C then calls __GET_GLOBAL_<name>, which nothing declares."""
+        declared: set[str] = set()
+        if self.config is not None:
+            declared.update(self.config.globals)
+            for res in self.config.resources:
+                declared.update(res.globals)
+        for pou in self.pous.values():
+            if pou.std or pou.no_code:
+                continue
+            for ext in pou.externals:
+                if ext.key in declared or ext in self.externals_reported:
+                    continue
+                where = ("the CONFIGURATION has no VAR_GLOBAL of that name" if self.config else
+                         "there is no CONFIGURATION to declare its VAR_GLOBAL")
+                self.report(ext.pos, f"VAR_EXTERNAL '{ext.name}' of {pou.name}: {where}. MatIEC's iec2c accepts "
+                                     f"this, but the C it generates does not compile (__GET_GLOBAL_{ext.key} is "
+                                     "never declared); build the POU with a CONFIGURATION that declares the global")
 
     # ------------------------------------------------------------------ bodies
     def check_body(self, pou: PouSym) -> None:
@@ -859,6 +943,8 @@ class Checker:
                 self.error(s.pos, f"{'EXIT' if isinstance(s, A.Exit) else 'CONTINUE'} outside a loop")
         elif isinstance(s, A.Return):
             pass
+        elif isinstance(s, A.PragmaStmt) and is_c_pragma(s.text):
+            self.error(s.pos, C_PRAGMA)
         elif isinstance(s, A.PragmaStmt):
             self.error(s.pos, "pragmas in a body (C code) are outside the supported subset")
         else:
@@ -1081,6 +1167,7 @@ class Checker:
     def settle(self, e: A.Node, t: T.Type) -> None:
         """Give a pseudo-typed expression (untyped literals, result-overloaded calls) the type t."""
         rights: list[tuple[A.Node, T.Type]] = []
+        chain: list[A.BinOp] = []
         # down a left-associative operator chain iteratively; the right operands are settled after the
         # innermost left one, the order of a recursive walk
         while isinstance(e, A.BinOp) and isinstance(e.ty, T.Pseudo):
@@ -1095,12 +1182,15 @@ class Checker:
             if op in ("AND", "OR", "XOR") and not T.is_bit(tb):
                 self.error(e.pos, f"{op} needs bit strings (BOOL, BYTE, WORD...), not {T.describe(t)}")
             e.ty = tb
+            chain.append(e)
             if op != "**":
                 rights.append((e.right, tb))
             e, t = e.left, tb
         self.settle_one(e, t)
         for right, tb in reversed(rights):
             self.settle(right, tb)
+        for b in reversed(chain):
+            self.check_constant(b, b.ty)
 
     def settle_one(self, e: A.Node, t: T.Type) -> None:
         p = e.ty
@@ -1148,6 +1238,10 @@ class Checker:
                               "s and ms)")
         if e.kind == "string":
             self.check_string_escapes(e)
+            self.check_string_ascii(e)
+        if e.kind == "string" and tn is not None:
+            self.error(e.pos, f"{tn}#{e.text}: a typed string literal is outside the supported subset (MatIEC's "
+                              "grammar has no typed string literals and refuses it); write the string alone")
         if e.kind == "real" and outside_float_range(e.text):
             self.error(e.pos, f"the real literal {e.text} is outside the range MatIEC accepts for any real "
                               "literal, LREAL included (it reads them as 32-bit floats: 1.18E-38 to 3.40E38 in "
@@ -1198,6 +1292,14 @@ class Checker:
                 i += 1 + max(width, 1)
                 continue
             i += 1
+
+    def check_string_ascii(self, e: A.Literal) -> None:
+        """MatIEC's lexer takes only 7-bit characters in a string literal (a byte above 127 is no token)."""
+        bad = next((ch for ch in e.text if ord(ch) > 127), None)
+        if bad is not None:
+            self.error(e.pos, f"the string literal contains the non-ASCII character {bad!r}, which MatIEC refuses "
+                              "(its lexer knows 7-bit characters only in a string literal); write each byte as "
+                              "$hh, e.g. $E9")
 
     def _string_lit(self, e: A.Literal) -> T.Type:
         if len(e.value) > T.STR_MAX_LEN:
@@ -1338,9 +1440,9 @@ class Checker:
         t = self.unify(e.left, e.right, op, e.pos)
         if op in ("=", "<>", "<", ">", "<=", ">="):
             if isinstance(t, T.Pseudo):
-                self.settle(e.left, t.default)
-                self.settle(e.right, t.default)
-                t = t.default
+                t = self.comparison_type(t, e.left, e.right)
+                self.settle(e.left, t)
+                self.settle(e.right, t)
             tb = t.base()
             if isinstance(tb, T.Enum):
                 if op not in ("=", "<>"):
@@ -1367,7 +1469,40 @@ class Checker:
         elif op in ("AND", "OR", "XOR"):
             if not T.is_bit(tb):
                 self.error(e.pos, f"{op} needs bit strings (BOOL, BYTE, WORD, DWORD, LWORD), not {T.describe(t)}")
+        self.check_constant(e, tb)
         return tb
+
+    def check_constant(self, e: A.BinOp, tb: T.Type) -> None:
+        """Refuse a constant operation whose value does not fit its type, as MatIEC's constant folding does
+        (constfold.py), intermediate results included."""
+        v = self.folder.overflow(e, tb)
+        if v is not None:
+            shown = f"{v:g}" if isinstance(v, float) else str(v)
+            held = f"{tb.lo}..{tb.hi}" if T.is_int(tb) else "finite values" if tb is T.LREAL else \
+                "-3.4028235E38..3.4028235E38"
+            self.error(e.pos, f"constant expression overflows {T.describe(tb)}: '{e.op}' gives {shown} ({held}); "
+                              "MatIEC's constant folding refuses it, also when a later operation brings it back")
+
+    def comparison_type(self, t: T.Pseudo, *sides: A.Node) -> T.Type:
+        """The type of untyped constants compared with each other. iec2c accepts them when some type holds
+        every value they fold to, and its C writes them as C literals: `3000000000 > 0` is compared as a
+        C long long (so here as LINT or ULINT when DINT is too small), but `2147483647 + 1` is a C int
+        addition that overflows (gcc wraps it: MatIEC's `2147483647 + 1 > 2147483647` is FALSE)."""
+        if t is not T.LIT_INT:
+            return t.default
+        for side in sides:
+            bad = self.folder.c_literal_overflow(side)
+            if bad is not None:
+                node, v = bad
+                self.error(node.pos, f"constant expression overflows C's int: '{node.op}' gives {v}; MatIEC builds "
+                                     "it but its C computes these untyped constants as C int literals, where "
+                                     "this overflows (undefined behaviour, in practice a wrapped value): write a "
+                                     "typed literal such as LINT#...")
+        found = [v for side in sides for _, v in self.folder.values(side)]
+        for cand in (t.default, T.LINT, T.ULINT):
+            if all(cand.lo <= v <= cand.hi for v in found):
+                return cand
+        return t.default
 
     @staticmethod
     def _is_zero(e: A.Node) -> bool:
@@ -1434,6 +1569,8 @@ class Checker:
         if v is not None:
             self.error(e.pos, f"'{e.name}' is a variable: a function block instance is called as a statement")
         pou = self.pous.get(k)
+        if pou is not None and pou.kind == "FUNCTION" and k in SF.USER_NAMEABLE:
+            pou = None      # MatIEC calls its standard function of that name, never the user's
         if pou is not None:
             if pou.kind != "FUNCTION":
                 self.error(e.pos, f"'{e.name}' is a {pou.kind}, not a FUNCTION")
@@ -1741,6 +1878,10 @@ def _has_index(e: A.Node) -> bool:
 def _selectable(t: T.Type) -> bool:
     tb = t.base()
     return isinstance(tb, T.Elem)
+
+
+def _a(noun: str) -> str:
+    return ("an " if noun[0] in "aeiou" else "a ") + noun
 
 
 def _hint(found: T.Type, want: T.Type) -> str:

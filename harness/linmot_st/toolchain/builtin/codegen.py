@@ -22,6 +22,8 @@ from .errors import BuiltinCompileError, Diagnostic
 from .symbols import PouSym, Program, Var
 
 FORCE = "__FORCED"
+# operators of a left-associative chain per C sub-expression (gcc parses nesting recursively)
+CHAIN_CHUNK = 200
 
 
 def cname_of(t: T.Type) -> str:
@@ -317,7 +319,7 @@ class CodeGen:
             yield f"{cfg.key}__{v.key}", f"{cfg.key}.{v.key}", v, None
         for r in cfg.resources:
             for v in r.globals.values():
-                yield f"{r.key}__{v.key}", f"{cfg.key}.{r.key}.{v.key}", v, r
+                yield f"{r.key}__{v.key}", f"{r.path()}.{v.key}", v, r
 
     def global_decls(self) -> list[str]:
         lines = ["/* ---- located variables, globals, program instances */"]
@@ -843,15 +845,23 @@ class CodeGen:
         return f"(({t.cname})(0 - ({u}){a}))"
 
     def ex_BinOp(self, e: A.BinOp) -> str:
-        # a left-associative chain (a sum of 5000 terms) is walked iteratively: its left operands nest
-        # without bound (gcc takes the nested C in its stride)
+        # a left-associative chain (a sum of 16,000 terms) is walked iteratively: its left operands nest
+        # without bound. gcc's parser recurses on each nested parenthesis and crashes beyond some thousands,
+        # so every CHAIN_CHUNK operators the partial result goes into a temporary of exactly its C type
+        # (__auto_type): each operator keeps its own C (its wrap to the node's type, its fault site), and
+        # the operands are still evaluated left to right.
         spine = [e]
         while isinstance(spine[-1].left, A.BinOp):
             spine.append(spine[-1].left)
         acc = self.expr(spine[-1].left)
-        for node in reversed(spine):
+        steps = []
+        for i, node in enumerate(reversed(spine), 1):
             acc = self.binop(node, acc)
-        return acc
+            if i % CHAIN_CHUNK == 0 and i < len(spine):
+                tmp = self.new_tmp()
+                steps.append(f"__auto_type {tmp} = {acc};")
+                acc = tmp
+        return "({ " + " ".join(steps) + f" {acc}; }})" if steps else acc
 
     def binop(self, e: A.BinOp, a: str) -> str:
         """C of `e`, its left operand's C being `a`."""
@@ -1287,7 +1297,7 @@ class CodeGen:
         if cfg is not None:
             for r in cfg.resources:
                 for inst in r.programs:
-                    roots.append((f"{cfg.key}.{r.key}.{inst.key}", self.type_ref(inst.pou.ty, types),
+                    roots.append((f"{r.path()}.{inst.key}", self.type_ref(inst.pou.ty, types),
                                   f"&{r.key}__{inst.key}"))
         for cell in self.prog.located.values():
             roots.append((cell.location, self.type_ref(cell.ty, types), f"&{cell.cname}"))

@@ -18,7 +18,18 @@ from . import ast as A
 from . import bulkinit
 from .errors import Diagnostic, BuiltinCompileError
 
+# MatIEC's C pragma {{ ... }}: iec2c pastes its text into the C it writes, unchecked
+C_PRAGMA = ("C pragmas ({{ ... }}) are not supported by the builtin compiler: iec2c pastes their text into its "
+            "own C, which refers to MatIEC's generated names; the builtin compiler writes different C, in which "
+            "that text cannot work")
+
+
+def is_c_pragma(text: str) -> bool:
+    return text.startswith("{{") and text.endswith("}}")
+
+
 GRAMMAR = Path(__file__).with_name("st.lark")
+IMPLICIT_RESOURCE = "RESOURCE"    # the name of the resource of a CONFIGURATION written without one
 
 # words that MatIEC does not know, or knows only outside this subset: a syntax error at one of them
 # gets a message that says so rather than "unexpected token"
@@ -202,6 +213,13 @@ class _Builder(lark.Transformer):
                           [x for x in rest if isinstance(x, A.VarBlock)],
                           [x for x in rest if isinstance(x, A.TaskDecl)],
                           [x for x in rest if isinstance(x, A.ProgramConfig)])
+
+    def single_resource(self, items):
+        # MatIEC names this resource RESOURCE in its C (RESOURCE__INST) and leaves it out of the
+        # variables' paths (CONFIG.INST.VAR)
+        return A.Resource(items[0].pos, IMPLICIT_RESOURCE, "", [],
+                          [x for x in items if isinstance(x, A.TaskDecl)],
+                          [x for x in items if isinstance(x, A.ProgramConfig)], implicit=True)
 
     def task(self, items):
         name, *params = items
@@ -672,6 +690,8 @@ def _syntax_diagnostic(exc: lark.UnexpectedInput, text: str, file: str) -> Diagn
             return Diagnostic(file, bl, bc, f"{UNSUPPORTED_WORDS[before.group(1).upper()]} is outside the supported subset")
         if word in UNSUPPORTED_WORDS:
             return Diagnostic(file, line, col, f"{UNSUPPORTED_WORDS[word]} is outside the supported subset")
+        if tok.type == "PRAGMA" and is_c_pragma(str(tok)):
+            return Diagnostic(file, line, col, C_PRAGMA)
         if tok.type == "PRAGMA":
             return Diagnostic(file, line, col, "a pragma is not allowed here")
         if tok.type == "$END":

@@ -78,6 +78,11 @@ _fam("DIVTIME", ("IN1", "IN2"))
 _fam("CONCAT_DATE_TOD", ("IN1", "IN2"))
 CONV = Family("CONV", ("IN",), False, 1)
 
+# the standard functions a user FUNCTION may be named after: iec2c builds such a FUNCTION, but wherever the
+# name is called it calls its own standard function (measured: docs/builtin-compiler.md). The others are
+# operators to iec2c ("Function overloading not allowed") or clash with its C (CONCAT, CONCAT_DATE_TOD).
+USER_NAMEABLE = frozenset(FAMILIES) - {"AND", "OR", "XOR", "NOT", "MOD", "CONCAT", "CONCAT_DATE_TOD"}
+
 
 def param_names(fam: Family, n_args: int) -> list[str]:
     """Formal names of the first n arguments (IN1, IN2, IN3... for an extensible family)."""
