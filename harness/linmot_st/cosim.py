@@ -8,6 +8,11 @@ PLC time t:
   3. plc.step(1);
   4. Tx[1..TxCount] are sent in order, ready at t, and TxCount is set to 0 (a TxCount outside 0..32, or
      a Tx frame with Id > 16#7FF or Dlc > 8, raises CoSimError: no CAN driver could send it).
+Idle scans (`fast_idle`, the default): when the scan at t would receive nothing (no frame delivered, no
+echo due, no bus event at or before t), the scans up to the next bus event run in one C call
+(Plc.step_idle) with RxCount = 0, ending early after the scan that fills Tx or changes a variable that
+run_until's predicate watches (its `idle_watch`). The bus sees the same frames at the same times as with
+every scan stepped from Python (docs/plc-integration.md section 1.1; tests/test_cosim_idle.py).
 With `echo` (the default) the mailbox's TxEcho is set and step 2 also puts each SDO request the PLC sent
 (600h..67Fh) back into Rx once its transmission ended on the bus (Echo TRUE), in bus order with the
 received frames: the transmit confirmation of a PLC CAN driver (docs/plc-integration.md section 1).
@@ -170,12 +175,39 @@ class Mailbox:
         return frames
 
 
+class IdlePredicate:
+    """Base of a run_until predicate that lets idle scans run in C between its calls: it watches the
+    variables it reads (`idle_watch`) and counts scans by the PLC's scan counter. `scans` is what a
+    counter of its calls would hold (the predicate is called before each scan and after the last): the
+    scans run so far inside a call, one more after it."""
+
+    def __init__(self, plc: Any, watched: list) -> None:
+        from linmot_st.plc import IdleWatch
+
+        self.plc = plc
+        self.idle_watch = IdleWatch(watched) if hasattr(plc, "step_idle") else None
+        self._scan0 = plc.scan_count
+        self._in_call = True      # until the first call ends: no scan counted yet
+
+    @property
+    def scans(self) -> int:
+        return self.plc.scan_count - self._scan0 + (0 if self._in_call else 1)
+
+    def begin_call(self) -> int:
+        """At the start of a call: the scans run so far."""
+        self._in_call = True
+        return self.plc.scan_count - self._scan0
+
+    def end_call(self) -> None:
+        self._in_call = False
+
+
 class CoSim:
     """A PLC stepped scan by scan against a SimBus; the PLC is the bus endpoint named `name`. `echo`
     (default: when the mailbox type has the field) gives the PLC the echo of its transmitted frames."""
 
     def __init__(self, plc: Any, bus: Any, mailbox: str = "CONFIG0.RES0.CAN0", name: str = "plc",
-                 echo: bool | None = None) -> None:
+                 echo: bool | None = None, fast_idle: bool = True) -> None:
         self.plc = plc
         self.bus = bus
         self.mailbox = Mailbox(plc, mailbox)
@@ -188,37 +220,82 @@ class CoSim:
         self.frames_sent = 0
         self.frames_received = 0
         self.rx_dropped = 0   # frames that did not fit into Rx (also counted in the PLC's RxLost)
+        # idle scans in C need the loader's step_idle, INT counters (the glue writes them as C shorts) and a
+        # bus that tells its next event
+        mb = self.mailbox
+        self.fast_idle = bool(fast_idle and hasattr(plc, "step_idle") and hasattr(bus, "next_event_ns")
+                              and getattr(mb._rx_count, "nbytes", 0) == 2 and getattr(mb._tx_count, "nbytes", 0) == 2)
+        self.idle_scans = 0   # scans run by the fast idle path
 
     def step(self, n: int = 1) -> None:
         """Run n scans."""
+        done = 0
+        while done < n:
+            done += self._advance(n - done, None)
+
+    def _advance(self, limit: int, watch: Any) -> int:
+        """Idle scans in C (at most `limit`) when the next scan is idle, else one scan from Python; returns
+        the scans run."""
+        if self.fast_idle:
+            k = self._idle(limit, watch)
+            if k:
+                return k
+        self._scan()
+        return 1
+
+    def _idle(self, limit: int, watch: Any) -> int:
+        """Up to `limit` idle scans in C when the next scan would receive nothing; returns the scans run (0:
+        the next scan is not idle)."""
+        plc, bus = self.plc, self.bus
+        t = plc.time_ns
+        if t < bus.now or self.endpoint.inbox or (self.echo and len(bus.trace) != self._trace_pos):
+            return 0
+        until = bus.next_event_ns(refresh=True)
+        if until is not None and until <= t:
+            return 0
+        mb = self.mailbox
+        k = plc.step_idle(limit, (1 << 64) - 1 if until is None else until, mb._rx_count, mb._tx_count, watch)
+        if not k:
+            return 0
+        self.scans += k
+        self.idle_scans += k
+        t_last = plc.time_ns - plc.tick_ns     # the start of the last scan: its frames are ready then
+        bus.run_until(t_last)                  # no event on the way: the bus's state as after a scan there
+        if mb._tx_count.value:
+            self._send(mb.take_tx(), t_last)
+        return k
+
+    def _send(self, frames: list[Frame], t: int) -> None:
+        send = self.endpoint.send
+        for f in frames:
+            send(f, t)
+        self.frames_sent += len(frames)
+
+    def _scan(self) -> None:
+        """One scan stepped from Python: deliver, fill Rx, step, send."""
         plc, bus, ep, mb = self.plc, self.bus, self.endpoint, self.mailbox
-        send = ep.send
-        for _ in range(n):
-            t = plc.time_ns
-            if t < bus.now:
-                raise CoSimError(f"PLC time {t} ns is behind the bus ({bus.now} ns): was the PLC reset?")
-            bus.run_until(t)
-            inbox = ep.inbox
-            own = self._echoes() if self.echo else None
-            if own:
-                ep.inbox = []
-                self.frames_received += len(inbox)
-                merged = sorted([(te, 0, f) for te, f in inbox] + [(te, 1, f) for te, f in own],
-                                key=lambda x: x[0])
-                self.rx_dropped += mb.write_rx([f for _, _, f in merged], [o == 1 for _, o, _ in merged])
-            elif inbox:
-                ep.inbox = []
-                self.frames_received += len(inbox)
-                self.rx_dropped += mb.write_rx([f for _, f in inbox])
-            else:
-                mb._rx_count.value = 0
-            plc.step(1)
-            self.scans += 1
-            if mb._tx_count.value:
-                frames = mb.take_tx()
-                for f in frames:
-                    send(f, t)
-                self.frames_sent += len(frames)
+        t = plc.time_ns
+        if t < bus.now:
+            raise CoSimError(f"PLC time {t} ns is behind the bus ({bus.now} ns): was the PLC reset?")
+        bus.run_until(t)
+        inbox = ep.inbox
+        own = self._echoes() if self.echo else None
+        if own:
+            ep.inbox = []
+            self.frames_received += len(inbox)
+            merged = sorted([(te, 0, f) for te, f in inbox] + [(te, 1, f) for te, f in own],
+                            key=lambda x: x[0])
+            self.rx_dropped += mb.write_rx([f for _, _, f in merged], [o == 1 for _, o, _ in merged])
+        elif inbox:
+            ep.inbox = []
+            self.frames_received += len(inbox)
+            self.rx_dropped += mb.write_rx([f for _, f in inbox])
+        else:
+            mb._rx_count.value = 0
+        plc.step(1)
+        self.scans += 1
+        if mb._tx_count.value:
+            self._send(mb.take_tx(), t)
 
     def _echoes(self) -> list[tuple[int, Frame]]:
         """The PLC's frames whose transmission ended since the previous scan, as (end time, frame)."""
@@ -230,11 +307,18 @@ class CoSim:
 
     def run_until(self, predicate: Callable[[], bool], max_scans: int) -> int:
         """Step until predicate() is true (checked before each scan and after the last); returns the
-        scans run. Raises CoSimTimeout when it is still false after max_scans."""
-        for k in range(max_scans):
+        scans run. Raises CoSimTimeout when it is still false after max_scans.
+
+        A predicate with an `idle_watch` (a plc.IdleWatch) declares that its result and what it records
+        change only when one of those variables does (it counts scans by plc.scan_count, not by its
+        calls): idle scans then run in C between its calls, each run ending after the scan that changed
+        one. Without it the predicate is called before every scan."""
+        watch = getattr(predicate, "idle_watch", None)
+        k = 0
+        while k < max_scans:
             if predicate():
                 return k
-            self.step(1)
+            k += self._advance(max_scans - k, watch) if watch is not None else self._advance(1, None)
         if predicate():
             return max_scans
         raise CoSimTimeout(f"condition not met within {max_scans} scans (PLC time {self.plc.time_ns} ns)")

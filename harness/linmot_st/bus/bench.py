@@ -179,13 +179,15 @@ def measure_cosim(scans: int = 20_000) -> list[dict]:
         src = Path(tmp) / "echo.st"
         src.write_text(ECHO_ST)
         res = toolchain.build(str(src), backend=backend)
-        for label, traffic in (("1 frame in + 1 out per scan", True), ("no traffic", False)):
+        for label, traffic, fast in (("1 frame in + 1 out per scan", True, True),
+                                     ("no traffic, every scan from Python", False, False),
+                                     ("no traffic, idle scans in C", False, True)):
             plc = Plc(res)
             bus = SimBus(500_000)
             node = ScriptedNode([(0, Frame(0x181, bytes(8)))] if traffic else [],
                                 replies=lambda f, t: [(t, Frame(0x181, f.data))])
             bus.attach(node, "node")
-            sim = CoSim(plc, bus, mailbox="CONFIG0.RES0.CAN0")
+            sim = CoSim(plc, bus, mailbox="CONFIG0.RES0.CAN0", fast_idle=fast)
             sim.step(100)
             t0 = time.perf_counter()
             sim.step(scans)

@@ -276,8 +276,11 @@ class SimBus:
         else:
             insort(q, (ready, self._seq, frame))
 
-    def next_event_ns(self) -> int | None:
-        """Time of the next event (frame end, action, timer, transmission start), None if there is none."""
+    def next_event_ns(self, refresh: bool = False) -> int | None:
+        """Time of the next event (frame end, action, timer, transmission start), None if there is none.
+        `refresh` reads every node's timer first, as run_until does (a node changed from outside)."""
+        if refresh:
+            self._refresh_timers()
         times = [p.timer for p in self._parts if p.timer is not None]
         if self._tx is not None:
             times.append(self._tx[3])
@@ -293,13 +296,7 @@ class SimBus:
             raise ValueError(f"run_until({t_end}): bus time is already {self.now} ns")
         parts = self._parts
         actions = self._actions
-        # A node may have been changed from outside since the bus last called it (attach, then
-        # power_on(0)): read every timer again, so that the order of such calls does not matter.
-        now = self.now
-        for p in parts:
-            if p.has_timer:
-                t = p.node.next_timer_ns()
-                p.timer = None if t is None else (t if t > now else now)
+        self._refresh_timers()
         while True:
             tx = self._tx
             # the earliest event; ties go to the first kind checked
@@ -341,6 +338,15 @@ class SimBus:
         for p in parts:
             if p.observe is not None:
                 p.observe(t_end)
+
+    def _refresh_timers(self) -> None:
+        # A node may have been changed from outside since the bus last called it (attach, then
+        # power_on(0)): read every timer again, so that the order of such calls does not matter.
+        now = self.now
+        for p in self._parts:
+            if p.has_timer:
+                t = p.node.next_timer_ns()
+                p.timer = None if t is None else (t if t > now else now)
 
     def _fire_timer(self, part: _Part, t: int) -> None:
         self._queue_all(part, t, part.node.on_timer(t))

@@ -17,6 +17,8 @@ import time
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
+from linmot_st.cosim import IdlePredicate
+
 from .project import INSTANCE, MAILBOX, MAX_AXES
 
 PHASES = ("idle", "wait", "start", "check", "compare", "preflight", "params", "curves", "ct", "flash", "reset", "verify", "done")
@@ -61,6 +63,8 @@ class RunOptions:
     latency_ns: int = 0                        # extra latency of the drives' frames on the simulated bus
     timeout_s: float | None = None             # virtual (sim) or wall seconds; default from the dataset
     emulate: bool = True                       # False: real drives on the bus (python-can buses only)
+    fast_idle: bool = True                     # sim: idle scans run in C (linmot_st.cosim); False: every scan
+                                               # from Python (the same frames at the same times, slower)
 
     def nodes(self) -> list[int]:
         ids = list(self.node_ids) if self.node_ids else list(range(1, self.axes + 1))
@@ -193,11 +197,10 @@ class RunResult:
         return all(a.done for a in self.axes) and not self.timed_out and not self.fault and not self.interrupted
 
 
-class Sampler:
+class Sampler(IdlePredicate):
     """Reads each axis' outputs after every scan; records phase boundaries; tells the progress display."""
 
     def __init__(self, plc, node_ids: list[int], progress=None) -> None:
-        self.plc = plc
         self.progress = progress
         self.axes = [AxisResult(k + 1, n) for k, n in enumerate(node_ids)]
         v = plc.var
@@ -206,16 +209,19 @@ class Sampler:
                            up=v(f"{INSTANCE}.A{k}.UP"), items=v(f"{INSTANCE}.A{k}.COM.ITEMSDONE"),
                            total=v(f"{INSTANCE}.A{k}.COM.ITEMSTOTAL"))
                       for k in range(1, len(node_ids) + 1)]
+        # what __call__ records depends on these alone (ITEMSDONE only feeds the live progress line)
+        super().__init__(plc, [vs[name] for vs in self._vars for name in ("phase", "exch", "done", "error",
+                                                                            "up", "total")])
         self._last_exch = [0] * len(node_ids)
         self._started = [False] * len(node_ids)
-        self.scans = 0
 
     def __call__(self) -> bool:
         """Called before each scan (and after the last): True when every axis has finished."""
         plc = self.plc
-        if self.scans:
+        run = self.begin_call()
+        if run:
             t_scan = plc.time_ns - plc.tick_ns      # the scan that just ran
-            scan = self.scans - 1
+            scan = run - 1
             for k, (ax, vs) in enumerate(zip(self.axes, self._vars)):
                 if ax.finished:
                     continue
@@ -248,7 +254,7 @@ class Sampler:
                 self._last_exch[k] = exch
             if self.progress:
                 self.progress.tick(self, plc.time_ns)
-        self.scans += 1
+        self.end_call()
         return all(a.finished for a in self.axes)
 
     def close(self) -> None:
@@ -390,7 +396,7 @@ def _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, time
     wear_before = {n: drive_wear(d) for n, d in drives.items()}
     if prepare_bus:
         prepare_bus(bus, drives)
-    sim = CoSim(plc, bus, mailbox=MAILBOX, name="plc")
+    sim = CoSim(plc, bus, mailbox=MAILBOX, name="plc", fast_idle=opts.fast_idle)
     _configure(plc, opts, nodes, _curve_memory(opts, drives), bases)
     if prepare_plc:
         prepare_plc(plc)

@@ -97,7 +97,7 @@ def value_element(parent, tag: str, init: A.Node, **attrs) -> etree._Element:
     el = _sub(parent, tag, **attrs)
     if isinstance(init, A.ArrayInit):
         arr = _sub(el, "arrayValue")
-        for count, item in init.items:
+        for count, item in init.entries():
             if item is None:           # n() : n elements keep their default
                 _sub(_sub(arr, "value", repetitionValue=count), "simpleValue")
             else:

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 
 from linmot_st.commission.project import INSTANCE
 from linmot_st.commission.runner import RunOptions, RunResult, run
+from linmot_st.cosim import IdlePredicate
 
 from .plan import MAX_STEPS, Plan
 
@@ -72,22 +73,22 @@ class MotionResult:
         return all(a.done for a in self.axes) and not self.timed_out
 
 
-class MotionSampler:
+class MotionSampler(IdlePredicate):
     """Reads each axis' StepNo and end flags after every scan; records step boundaries; tells progress."""
 
     def __init__(self, plc, node_ids: list[int], plan: Plan, progress=None, drives: dict | None = None):
-        self.plc, self.plan, self.progress = plc, plan, progress
+        self.plan, self.progress = plan, progress
         self.drives = drives or {}
         self.axes = [AxisMotion(k + 1, n) for k, n in enumerate(node_ids)]
         v = plc.var
         self._vars = [dict(step=v(f"{INSTANCE}.A{k}.MOT.STEPNO"), done=v(f"{INSTANCE}.A{k}.MOT.DONE"),
                            error=v(f"{INSTANCE}.A{k}.MOT.ERROR"))
                       for k in range(1, len(node_ids) + 1)]
-        self.scans = 0
+        super().__init__(plc, [x for vs in self._vars for x in vs.values()])
 
     def __call__(self) -> bool:
         plc = self.plc
-        if self.scans:
+        if self.begin_call():
             t = plc.time_ns            # the end of the scan that just ran
             for ax, vs in zip(self.axes, self._vars):
                 if ax.done or ax.error:
@@ -110,7 +111,7 @@ class MotionSampler:
                         cur.off1_ns = self._offset(ax.node_id, t)
                         if self.progress:
                             self.progress.step_done(ax, cur)
-        self.scans += 1
+        self.end_call()
         return all(a.done or a.error for a in self.axes)
 
     def _offset(self, node: int, plc_t: int) -> int:

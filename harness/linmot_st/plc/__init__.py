@@ -3,7 +3,7 @@
 from .access import PathError
 from .faults import FAULT_KINDS, PlcFault
 from .layout import LayoutError
-from .runtime import Plc
+from .runtime import IdleWatch, Plc
 from .variable import Var
 
-__all__ = ["Plc", "PlcFault", "PathError", "LayoutError", "Var", "FAULT_KINDS"]
+__all__ = ["Plc", "IdleWatch", "PlcFault", "PathError", "LayoutError", "Var", "FAULT_KINDS"]

@@ -20,12 +20,14 @@ from .faults import PlcFault, locate_with_debug_info
 from .layout import Layout, LayoutError
 from .variable import Var, make_var
 
-ABI_VERSION = 2
+ABI_VERSION = 3
 
 _ABI = {
     "plc_abi_version": ([], ctypes.c_int),
     "plc_init": ([], None),
     "plc_step": ([ctypes.c_ulong], ctypes.c_ulong),
+    "plc_step_idle": ([ctypes.c_ulong, ctypes.c_ulonglong, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p,
+                       ctypes.c_void_p, ctypes.c_int, ctypes.c_void_p], ctypes.c_ulong),
     "plc_fault_kind": ([], ctypes.c_int),
     "plc_fault_pou": ([], ctypes.c_char_p),
     "plc_fault_file": ([], ctypes.c_char_p),
@@ -57,6 +59,20 @@ def _build_paths(build: Any) -> tuple[Path, Path]:
     raise TypeError(f"cannot load a PLC from {build!r}: pass a build result, a build folder or (library, manifest)")
 
 
+class IdleWatch:
+    """The variables whose change ends a run of idle scans (Plc.step_idle), as the C arrays the glue reads."""
+
+    def __init__(self, variables: list[Var]) -> None:
+        self.variables = list(variables)
+        self.count = len(self.variables)
+        self.addrs = (ctypes.c_void_p * max(1, self.count))(*[v.address for v in self.variables])
+        self.sizes = (ctypes.c_ulong * max(1, self.count))(*[v.nbytes for v in self.variables])
+        self.shadow = ctypes.create_string_buffer(max(1, sum(v.nbytes for v in self.variables)))
+
+
+_NO_WATCH = IdleWatch([])
+
+
 class Plc:
     """One independent PLC instance. See docs/architecture.md section 2."""
 
@@ -85,6 +101,7 @@ class Plc:
         self._pous = {p.upper() for p in self.manifest.get("pous", {})}
         self._vars: dict[str, Var] = {}
         self._step_fn = self._lib.plc_step
+        self._step_idle_fn = self._lib.plc_step_idle
         self._lib.plc_init()
         self._check_fault()
 
@@ -115,6 +132,20 @@ class Plc:
         """Run n scans in C. Raises PlcFault if one faults (the scans before it have run)."""
         if self._step_fn(n) != n:
             self._check_fault()
+
+    def step_idle(self, n: int, until_ns: int, rx_count: Var, tx_count: Var, watch: "IdleWatch | None" = None) -> int:
+        """Idle scans in C: up to n scans with rx_count := 0 before each, ending before a scan that would start
+        at or after until_ns, after the scan that made tx_count non-zero or changed a watched variable
+        (`watch`), or at a fault (PlcFault). Returns the scans run. rx_count and tx_count are INT variables
+        (a T_CanMailbox's RxCount and TxCount)."""
+        if n <= 0:
+            return 0
+        w = watch or _NO_WATCH
+        done = self._step_idle_fn(n, until_ns, rx_count.address, tx_count.address, w.addrs, w.sizes, w.count,
+                                  w.shadow)
+        if done < n and self._lib.plc_fault_kind():
+            self._check_fault()
+        return done
 
     def reset(self) -> None:
         """Cold restart: every root variable zeroed (force flags too), initialised again, time 0."""

@@ -143,6 +143,13 @@ def run() -> list[dict]:
                 rows.append(dict(name=f"build {label}, cached, in a fresh Python process ({backend})",
                                  value=round(_fresh_process_build(path, backend, tmp / f"{path.stem}-{backend}"), 3),
                                  unit="s", target=None))
+    from . import bigbuild
+    for backend in backends:
+        try:   # the 100k-statement program on the builtin backend only: iec2c alone takes minutes on it
+            rows += bigbuild.rows(backend, program=backend == "builtin" or len(backends) == 1)
+        except Exception as exc:   # report, don't break the other figures
+            rows.append(dict(name=f"big builds ({backend}): failed: {str(exc).splitlines()[0]}", value=0, unit="",
+                             target=None))
     return rows
 
 

@@ -21,6 +21,17 @@ GLUE_SOURCES = [GLUE_DIR / "plc_glue.c"]
 
 # -g: the line table lets a fault's address be mapped back to its POU and ST line
 BASE_FLAGS = ["-O1", "-g1", "-fPIC", "-Wno-unused-function", "-fno-strict-aliasing"]
+# Optimisation level by size (docs/toolchain.md). gcc's -O1 grows faster than linearly with the length of
+# one function (its memory-SSA walks over a body that stores through one pointer again and again): one
+# function of 10k ST statements took ~55 s and 400 MB at -O1, ~4 s at -O0; and even cut into short
+# functions, straight-line ST costs -O1 about 1 ms per C line. A unit with a function longer than
+# LONG_FUNCTION_LINES, or longer than LARGE_UNIT_LINES in all, is compiled at -O0. plc_project's units stay
+# far below both (about 10k lines, the longest function a few hundred).
+LONG_FUNCTION_LINES = 4000
+LARGE_UNIT_LINES = 40_000
+# ... and gcc collects its garbage more often there: a 48k-line unit peaked at 262 MB instead of 380 MB for
+# 14 % more CPU (a 100k-statement program: 1.2 GB before)
+LARGE_UNIT_MEMORY_FLAGS = ("--param", "ggc-min-expand=30", "--param", "ggc-min-heapsize=32768")
 # -z defs: a symbol the generated C uses but never defines fails the link, not the later dlopen
 LINK_FLAGS = ["-shared", "-Wl,-z,defs", "-lm", "-ldl", "-lpthread", "-lrt"]   # -lrt: timer_create (glibc < 2.34)
 
@@ -93,6 +104,34 @@ def checks_undefined_values() -> bool:
     return any(CHECKS in f for f in _check_flags())
 
 
+def longest_function_lines(text: str) -> int:
+    """Lines of the longest top-level brace block of a C text: from a line at column 0 that opens one
+    ('{' alone, or a declaration ending in '{') to the next line that starts with '}'. Both backends
+    write function bodies so."""
+    longest, start = 0, None
+    for i, line in enumerate(text.split("\n")):
+        if start is None:
+            if line[:1] not in ("", " ", "\t", "#", "/", "*", "}") and line.rstrip().endswith("{") or line == "{":
+                start = i
+        elif line[:1] == "}":
+            longest = max(longest, i - start)
+            start = None
+    return longest
+
+
+def size_flags(unit: Path) -> list[str]:
+    """Flags by the unit's size: -O0 for a unit longer than LARGE_UNIT_LINES or with a function longer
+    than LONG_FUNCTION_LINES."""
+    try:
+        text = Path(unit).read_text(errors="replace")
+    except OSError:
+        return []
+    big = text.count("\n") > LARGE_UNIT_LINES or longest_function_lines(text) > LONG_FUNCTION_LINES
+    if not big:
+        return []
+    return ["-O0", *(LARGE_UNIT_MEMORY_FLAGS if supports(LARGE_UNIT_MEMORY_FLAGS) else ())]
+
+
 def compile_shared(units: list[Path], output: Path, *, include_dirs: list[Path] = (),
                    unit_flags: dict[Path, list[str]] | None = None, cwd: Path | None = None,
                    extra_flags: list[str] = ()) -> None:
@@ -103,7 +142,7 @@ def compile_shared(units: list[Path], output: Path, *, include_dirs: list[Path] 
     jobs = []
     for unit in units:
         obj = objdir / (unit.stem + ".o")
-        flags = (unit_flags or {}).get(unit, [])
+        flags = (unit_flags or {}).get(unit, []) + size_flags(unit)
         jobs.append((unit, obj, [*cc, *BASE_FLAGS, *extra_flags, *flags, *incs, "-c", str(unit), "-o", str(obj)]))
 
     def run(job):

@@ -79,6 +79,11 @@ class UnsupportedSpec(Node):
 @dataclass(eq=False)
 class ArrayInit(Node):
     items: list[tuple[int, Node | None]]   # (repeat count, value or None for the default)
+    ints: Any = None                       # a bulkinit.BulkInts instead of items: a long list of plain literals
+
+    def entries(self) -> list[tuple[int, Node | None]]:
+        """`items`, or, for a list read by bulkinit, its literals as items (each at its own position)."""
+        return self.items if self.ints is None else self.ints.items(self.pos.file)
 
 
 @dataclass(eq=False)

@@ -379,6 +379,10 @@ class Checker:
     def const_value(self, init: A.Node, ty: T.Type) -> None:
         """Check an initial value against its type (the value itself is computed by codegen)."""
         tb = ty.base() if not isinstance(ty, T.Subrange) else ty
+        if isinstance(init, A.ArrayInit) and init.ints is not None:
+            if _bulk_fits(init.ints.values, ty):
+                return
+            init.items, init.ints = init.entries(), None    # the ordinary checks and messages
         if isinstance(init, A.ArrayInit):
             if not isinstance(ty, T.Array):
                 self.error(init.pos, f"an array initialiser for a variable of type {T.describe(ty)}")
@@ -1892,3 +1896,15 @@ def _hint(found: T.Type, want: T.Type) -> str:
     if isinstance(fb, T.Elem) and isinstance(wb, T.Elem):
         return f"; convert explicitly, e.g. {fb.name}_TO_{wb.name}(...)"
     return ""
+
+
+def _bulk_fits(values: list[int], ty: T.Type) -> bool:
+    """A long list of plain integer literals (bulkinit) that initialises an array of an integer or bit
+    string type, every value in range and no more values than elements: what the item-by-item checks
+    would accept."""
+    if not isinstance(ty, T.Array) or len(values) > ty.count:
+        return False
+    elem = ty.elem.base()
+    if not (isinstance(elem, T.Elem) and elem.kind in ("sint", "uint", "bit")) or isinstance(ty.elem, T.Subrange):
+        return False
+    return T.fits(min(values), elem) and T.fits(max(values), elem)

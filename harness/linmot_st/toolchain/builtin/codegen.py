@@ -56,6 +56,12 @@ def c_string(data: bytes) -> str:
     return '"' + "".join(out) + '"'
 
 
+# A PROGRAM or FUNCTION_BLOCK body longer than this many C lines is cut into functions of about this
+# length at statement boundaries: gcc's time and memory grow faster than linearly with one function's
+# length (docs/builtin-compiler.md, "Long bodies").
+BODY_PART_LINES = 1000
+
+
 def c_int(v: int, t: T.Type) -> str:
     tb = t.base()
     bits = tb.bits if isinstance(tb, T.Elem) else 32
@@ -161,6 +167,9 @@ class CodeGen:
     def value_of(self, init: A.Node, t: T.Type):
         if init is None:
             return self.default_value(t)
+        if isinstance(init, A.ArrayInit) and init.ints is not None:
+            d = self.default_value(t.elem)
+            return list(init.ints.values) + [d] * (t.count - len(init.ints.values))
         if isinstance(init, A.ArrayInit):
             vals = []
             for count, v in init.items:
@@ -198,6 +207,9 @@ class CodeGen:
         if isinstance(tb, T.Array):
             if self.is_zero(v):
                 return "{{0}}"
+            eb = tb.elem.base()
+            if isinstance(eb, T.Elem) and eb.kind in ("uint", "bit") and eb.bits == 32:
+                return "{{" + ",".join([f"{x}U" for x in v]) + "}}"    # the dataset's DWORDs: c_int, fast
             return "{{" + ", ".join(self.c_init(tb.elem, x) for x in v) + "}}"
         if isinstance(tb, T.Struct):
             if self.is_zero(v):
@@ -474,12 +486,36 @@ class CodeGen:
         for v in p.layout():
             if v.kind == "VAR_TEMP":
                 lines.extend(self.init_member(v, "data__->"))
-        self.statements(p.ast.body)
-        lines.extend(self.body)
+        parts = self.body_parts(p.ast.body)
+        if len(parts) == 1:
+            lines.extend(parts[0])
+            head = []
+        else:
+            # a long body: each part its own function (gcc's cost grows faster than the length of one);
+            # a RETURN inside a part ends the part with 1, and the body with it
+            head = []
+            for k, part in enumerate(parts, 1):
+                name = f"{p.key}_body__part{k}"
+                head += [f"__attribute__((noinline)) static int {name}({p.ty.cname} *data__)", "{", *part,
+                         "  return 0;", "__end: return 1;", "}", ""]
+                lines.append(f"  if ({name}(data__)) goto __end;")
         lines.append("__end: ;")
         lines.append("}")
         lines.append("")
-        return lines
+        return head + lines
+
+    def body_parts(self, stmts: list[A.Node]) -> list[list[str]]:
+        """The C lines of a body's statements, cut after the statement that passes BODY_PART_LINES."""
+        parts = []
+        self.body = []
+        for s in stmts:
+            getattr(self, "st_" + type(s).__name__)(s)
+            if len(self.body) >= BODY_PART_LINES:
+                parts.append(self.body)
+                self.body = []
+        if self.body or not parts:
+            parts.append(self.body)
+        return parts
 
     # ------------------------------------------------------------------ places (lvalues)
     def place(self, e: A.Node) -> tuple[str, str | None]:

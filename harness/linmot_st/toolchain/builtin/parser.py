@@ -15,6 +15,7 @@ import lark
 from lark import Token
 
 from . import ast as A
+from . import bulkinit
 from .errors import Diagnostic, BuiltinCompileError
 
 # MatIEC's C pragma {{ ... }}: iec2c pastes its text into the C it writes, unchecked
@@ -66,6 +67,7 @@ class _Builder(lark.Transformer):
     """
 
     file = "<input>"
+    bulk: dict = {}         # placeholder position -> bulkinit.BulkInts, for the parse under way
 
     def _tpos(self, tok: Token) -> A.Pos:
         return A.Pos(self.file, tok.line, tok.column)
@@ -140,6 +142,11 @@ class _Builder(lark.Transformer):
     def array_init(self, items):
         out = [it if isinstance(it, tuple) else (1, it) for it in items]
         first = out[0][1]
+        if len(out) == 1 and isinstance(first, A.Literal) and first.text == "0" and self.bulk:
+            bulk = self.bulk.pop((first.pos.line, first.pos.col), None)
+            if bulk is not None:      # the placeholder of a long literal list (bulkinit)
+                line, col = bulk.first_pos()
+                return A.ArrayInit(A.Pos(self.file, line, col), [], bulk)
         return A.ArrayInit(first.pos if first is not None else A.Pos(self.file, 0, 0), out)
 
     def array_repeat(self, items):
@@ -632,7 +639,14 @@ def parse(text: str, file: str) -> list[A.Node]:
     """Parse one file's text; `file` is the name diagnostics use. Raises BuiltinCompileError."""
     parser, builder = _parser()
     builder.file = file
+    fast_text, builder.bulk = bulkinit.extract(text)
     try:
+        if builder.bulk:
+            nodes = parser.parse(fast_text)
+            if not builder.bulk:
+                return nodes
+            # a placeholder the grammar never reached (inside a comment or a string): read it all as written
+            builder.bulk = {}
         return parser.parse(text)
     except lark.exceptions.VisitError as exc:       # an error raised inside a callback
         if isinstance(exc.orig_exc, BuiltinCompileError):

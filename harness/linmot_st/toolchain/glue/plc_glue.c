@@ -36,7 +36,7 @@
 #include <ucontext.h>
 #include <unistd.h>
 
-#define PLC_ABI_VERSION 2
+#define PLC_ABI_VERSION 3
 #define WD_TICKS 4
 
 typedef struct { long tv_sec; long tv_nsec; } plc_iec_time_t;   /* MatIEC's IEC_TIME */
@@ -331,7 +331,32 @@ __attribute__((visibility("default"))) void plc_init(void)
     in_scan = 0;
 }
 
-__attribute__((visibility("default"))) unsigned long plc_step(unsigned long n)
+/* What ends a run of idle scans early (plc_step_idle); NULL for plain scans (plc_step). */
+typedef struct {
+    unsigned long long until_ns;      /* no scan starts at or after this PLC time */
+    short *rx_count;                  /* the mailbox's RxCount (INT): 0 before each scan */
+    const short *tx_count;            /* the mailbox's TxCount (INT): the run ends after a scan that sets it */
+    unsigned char *const *watch;      /* byte ranges whose change ends the run after the scan that made it */
+    const unsigned long *watch_size;
+    int n_watch;
+    unsigned char *shadow;            /* their bytes before the scan, back to back */
+} idle_stop_t;
+
+static int watched_changed(const idle_stop_t *idle)
+{
+    const unsigned char *s = idle->shadow;
+    for (int i = 0; i < idle->n_watch; s += idle->watch_size[i], i++)
+        if (memcmp(idle->watch[i], s, idle->watch_size[i]) != 0) return 1;
+    return 0;
+}
+
+static void take_snapshot(const idle_stop_t *idle)
+{
+    unsigned char *s = idle->shadow;
+    for (int i = 0; i < idle->n_watch; s += idle->watch_size[i], i++) memcpy(s, idle->watch[i], idle->watch_size[i]);
+}
+
+static unsigned long run_scans(unsigned long n, const idle_stop_t *idle)
 {
     /* Globals are in memory at every call of config_run__, so after a siglongjmp plc_scans tells how
      * many scans completed; start is not modified after sigsetjmp, so it keeps its value. */
@@ -341,10 +366,15 @@ __attribute__((visibility("default"))) unsigned long plc_step(unsigned long n)
     install_handlers();
     const int watched = watchdog_ns && watchdog_timer();
     if (watched) watchdog_arm(1);
+    if (idle && idle->n_watch) take_snapshot(idle);
     if (sigsetjmp(scan_jmp, 1) == 0) {
         in_scan = 1;
         const long tick_ns = (long)common_ticktime__;
         for (unsigned long i = 0; i < n; i++) {
+            if (idle) {
+                if (plc_now_ns >= idle->until_ns) break;
+                *idle->rx_count = 0;          /* what the harness writes before a scan that receives nothing */
+            }
             config_run__(plc_tick++);
             plc_scans++;
             /* the clock advances incrementally: no 64-bit division per scan */
@@ -354,11 +384,28 @@ __attribute__((visibility("default"))) unsigned long plc_step(unsigned long n)
                 __CURRENT_TIME.tv_nsec -= 1000000000L;
                 __CURRENT_TIME.tv_sec++;
             }
+            if (idle && (*idle->tx_count || (idle->n_watch && watched_changed(idle)))) break;
         }
     }
     in_scan = 0;
     if (watched) watchdog_arm(0);
     return (unsigned long)(plc_scans - start);
+}
+
+__attribute__((visibility("default"))) unsigned long plc_step(unsigned long n) { return run_scans(n, NULL); }
+
+/* Idle scans (docs/plc-integration.md, "Idle scans"): up to n scans with an empty Rx, as the harness runs
+ * them while no frame reaches the PLC. The run ends before a scan that would start at or after until_ns
+ * (the next bus event), after the scan that put a frame into Tx, after a scan that changed a watched byte
+ * range (what the caller samples between scans), or at a fault. Returns the scans run; fewer than n
+ * without a fault is an ordinary end, the caller tells them apart by plc_fault_kind. */
+__attribute__((visibility("default")))
+unsigned long plc_step_idle(unsigned long n, unsigned long long until_ns, short *rx_count, const short *tx_count,
+                            unsigned char *const *watch, const unsigned long *watch_size, int n_watch,
+                            unsigned char *shadow)
+{
+    const idle_stop_t idle = {until_ns, rx_count, tx_count, watch, watch_size, n_watch, shadow};
+    return run_scans(n, &idle);
 }
 
 __attribute__((visibility("default"))) int plc_fault_kind(void) { return fault_kind; }

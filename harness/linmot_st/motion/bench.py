@@ -1,0 +1,88 @@
+"""`make demo` speed: PLC time simulated per wall-clock second, commissioning and motion job together.
+
+The run of `linmot-st motion examples/two_axes.pvl --axes N --drive-timings real` without its report:
+simulated time is the PLC's clock at the end of the motion job (from power-on, the drives' boot wait
+included), wall time is the two co-simulation runs (RunResult.wall_s + MotionResult.wall_s). Measured with
+idle scans in C (the default) and, for comparison, with every scan stepped from Python; plus the time the
+reports and plots take (`--report`). Targets: >= 300 x for 2 axes, >= 50 x for 16 (issue 12).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import tempfile
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[3]
+EXAMPLE = REPO / "examples" / "two_axes.pvl"
+TARGETS = {2: 300.0, 16: 50.0}
+
+
+def measure(axes: int, fast_idle: bool = True, report: Path | None = None) -> dict:
+    """One demo run; its figures (simulated s, wall s, ratio, scans, of which idle in C, frames)."""
+    from linmot_st.cli import build_parser
+    from linmot_st.commission.cli import commission_report, prepare_run, write_outputs
+
+    from .check import check_motion
+    from .cli import command_line
+    from .job import motion_phase, run
+    from .plan import plan as make_plan
+    from .report import MotionReport
+
+    argv = ["motion", str(EXAMPLE), "--axes", str(axes), "--drive-timings", "real", "--quiet"]
+    if report is not None:
+        argv += ["--report", str(report)]
+    args = build_parser().parse_args(argv)
+    prep = prepare_run(args, timings="real")
+    steps = make_plan(prep.pvl, 50.0)
+    opts = dataclasses.replace(prep.opts, fast_idle=fast_idle)
+    idle = []
+    motion = motion_phase(steps, 120.0)
+
+    def after(plc, sim, drives):
+        out = motion(plc, sim, drives)
+        idle.append(sim.idle_scans)
+        return out
+
+    res = run(prep.pvl, opts, prep.build, dataset=prep.dataset, after=after)
+    if res.after is None or res.after.timed_out:
+        raise RuntimeError(f"the demo run on {axes} axes did not finish: commissioned "
+                           f"{sum(a.done for a in res.axes)} of {axes}")
+    wall = res.wall_s + res.after.wall_s
+    sim_s = res.after.t1_ns / 1e9
+    out = dict(axes=axes, sim_s=sim_s, wall_s=wall, ratio=sim_s / wall, scans=res.scans + res.after.scans,
+               idle_scans=idle[0] if idle else 0, frames=len(res.trace))
+    if report is not None:
+        t0 = time.perf_counter()
+        text = commission_report(args, prep, res, command_line(args))
+        write_outputs(args, text, res)
+        MotionReport(res.after, check_motion(res.after, steps, res.drives), res.trace, res.drives).write(report)
+        out["report_s"] = time.perf_counter() - t0
+    return out
+
+
+def run() -> list[dict]:
+    from linmot_st.commission.project import MAX_AXES
+
+    rows = []
+    for axes in TARGETS:
+        n = min(axes, MAX_AXES)
+        label = f"{n} axes" if n == axes else f"{n} axes (plc_project's maximum; the target is for {axes})"
+        fast = measure(n)
+        slow = measure(n, fast_idle=False)
+        rows.append(dict(name=f"`make demo` simulated / wall time, {label}, idle scans in C "
+                              f"({fast['idle_scans']:,} of {fast['scans']:,} scans, {fast['frames']:,} frames)",
+                         value=round(fast["ratio"], 1), unit="x", target=f">= {TARGETS[axes]:g}"))
+        rows.append(dict(name=f"`make demo` simulated / wall time, {label}, every scan from Python",
+                         value=round(slow["ratio"], 1), unit="x", target=None))
+    with tempfile.TemporaryDirectory(prefix="linmot-st-demo-bench-") as tmp:
+        rep = measure(2, report=Path(tmp) / "report")
+    rows.append(dict(name="`make demo` reports and plots written (--report), 2 axes", value=round(rep["report_s"], 2),
+                     unit="s", target=None))
+    return rows
+
+
+if __name__ == "__main__":
+    for row in run():
+        print(f"{row['name']}: {row['value']} {row['unit']} (target {row['target']})")
