@@ -12,28 +12,9 @@ import pytest
 from linmot_st.toolchain.builtin import BuiltinCompileError, check_text, stdfb
 from linmot_st.toolchain.builtin.matiec_c_macros import names as c_macro_names
 from linmot_st.toolchain.testing import requires_matiec
+from name_places import name_places
 
-MAIN = "PROGRAM rf_main\n  VAR i : INT; END_VAR\n  i := i + 1;\nEND_PROGRAM\n"
-CONFIG = ("CONFIGURATION {cfg}\n  {glob}RESOURCE {res} ON PLC\n    TASK {task}(INTERVAL := T#10ms, PRIORITY := 0);\n"
-          "    PROGRAM {inst} WITH {task} : rf_main;\n  END_RESOURCE\nEND_CONFIGURATION\n")
-NAMES = {"cfg": "rf_cfg", "glob": "", "res": "rf_res", "task": "rf_task", "inst": "rf_inst"}
-
-# where a name goes: source with {n}
-PLACES = {
-    "function block": "FUNCTION_BLOCK {n}\n  VAR_INPUT a : INT; END_VAR\n  a := a;\nEND_FUNCTION_BLOCK\n" + MAIN,
-    "function": "FUNCTION {n} : INT\n  VAR_INPUT a : INT; END_VAR\n  {n} := a;\nEND_FUNCTION\n" + MAIN,
-    "program": "PROGRAM {n}\n  VAR i : INT; END_VAR\n  i := 1;\nEND_PROGRAM\n" + MAIN,
-    "type": "TYPE {n} : STRUCT a : INT; END_STRUCT; END_TYPE\n" + MAIN,
-    "variable": "PROGRAM rf_main\n  VAR {n} : INT; END_VAR\n  {n} := {n} + 1;\nEND_PROGRAM\n",
-    "output": "FUNCTION_BLOCK rf_fb\n  VAR_OUTPUT {n} : INT; END_VAR\n  {n} := 1;\nEND_FUNCTION_BLOCK\n" + MAIN,
-    "global": MAIN + CONFIG.format(**{**NAMES, "glob": "VAR_GLOBAL {n} : INT; END_VAR\n  "}),
-    "field": "TYPE rf_s : STRUCT {n} : INT; END_STRUCT; END_TYPE\n" + MAIN,
-    "enumerated value": "TYPE rf_e : (rf_a, {n}); END_TYPE\n" + MAIN,
-    "task": MAIN + CONFIG.format(**{**NAMES, "task": "{n}"}),
-    "program instance": MAIN + CONFIG.format(**{**NAMES, "inst": "{n}"}),
-    "resource": MAIN + CONFIG.format(**{**NAMES, "res": "{n}"}),
-    "configuration": MAIN + CONFIG.format(**{**NAMES, "cfg": "{n}"}),
-}
+PLACES, MAIN, CONFIG, NAMES = name_places("rf")
 # where iec2c's C holds the name as it is (tests/test_builtin_c_macros.py shows it with iec2c + gcc)
 C_NAMED = {"function block", "function", "program", "type", "variable", "output", "field", "task"}
 # where MatIEC refuses the name of one of its library's blocks (everywhere but a field)

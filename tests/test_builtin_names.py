@@ -16,26 +16,13 @@ from linmot_st.toolchain.builtin import BuiltinCompileError, check_text
 from linmot_st.toolchain.builtin import types as T
 from linmot_st.toolchain.builtin.checker import KEYWORDS, matiec_library_names
 from linmot_st.toolchain.testing import requires_matiec
+from name_places import name_places
 
-MAIN = "PROGRAM tn_main\n  VAR i : INT; END_VAR\n  i := i + 1;\nEND_PROGRAM\n"
-CONFIG = ("CONFIGURATION {cfg}\n  {glob}RESOURCE {res} ON PLC\n    TASK {task}(INTERVAL := T#10ms, PRIORITY := 0);\n"
-          "    PROGRAM {inst} WITH {task} : tn_main;\n  END_RESOURCE\nEND_CONFIGURATION\n")
-NAMES = {"cfg": "tn_cfg", "glob": "", "res": "tn_res", "task": "tn_task", "inst": "tn_inst"}
-
-# where a name goes: (kind, source with {n})
-PLACES = {
-    "FUNCTION_BLOCK": "FUNCTION_BLOCK {n}\n  VAR_INPUT a : INT; END_VAR\n  a := a;\nEND_FUNCTION_BLOCK\n" + MAIN,
-    "FUNCTION": "FUNCTION {n} : INT\n  VAR_INPUT a : INT; END_VAR\n  {n} := a;\nEND_FUNCTION\n" + MAIN,
-    "TYPE": "TYPE {n} : STRUCT a : INT; END_STRUCT; END_TYPE\n" + MAIN,
-    "CONFIGURATION": MAIN + CONFIG.format(**{**NAMES, "cfg": "{n}"}),
-    "variable": "PROGRAM tn_main\n  VAR {n} : INT; END_VAR\n  {n} := {n} + 1;\nEND_PROGRAM\n",
-    "field": "TYPE tn_s : STRUCT {n} : INT; END_STRUCT; END_TYPE\n" + MAIN,
-    "enumerated value": "TYPE tn_e : (tn_a, {n}); END_TYPE\n" + MAIN,
-    "resource": MAIN + CONFIG.format(**{**NAMES, "res": "{n}"}),
-    "task": MAIN + CONFIG.format(**{**NAMES, "task": "{n}"}),
-    "program instance": MAIN + CONFIG.format(**{**NAMES, "inst": "{n}"}),
-}
-REFUSED = ("FUNCTION_BLOCK", "FUNCTION", "TYPE", "CONFIGURATION")
+_ALL, MAIN, CONFIG, NAMES = name_places("tn")
+# where a name goes (the places iec2c -p treats apart: below, the first four refuse its library's names)
+PLACES = {k: _ALL[k] for k in ("function block", "function", "type", "configuration", "variable", "field",
+                                "enumerated value", "resource", "task", "program instance")}
+REFUSED = ("function block", "function", "type", "configuration")
 
 
 def source(place: str, name: str) -> str:
