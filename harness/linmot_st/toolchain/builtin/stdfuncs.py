@@ -233,3 +233,10 @@ class StdCall:
 
 
 MISSING_IN_MATIEC_C = _missing_in_matiec_c()
+
+
+def missing_overload_in_matiec_c(name: str, params: list[str] | tuple[str, ...]) -> bool:
+    """An overload MatIEC's library declares whose C iec2c calls by a name its headers do not define: a
+    shift or rotate of a BOOL (iec2c calls SHL__BOOL__BOOL__SINT; iec_std_functions.h defines SHL__BOOL__SINT).
+    The checker refuses it (`_shiftable`), case reject_shift_bool."""
+    return name in SHIFTS and bool(params) and params[0] == "BOOL"
