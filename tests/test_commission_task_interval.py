@@ -38,7 +38,7 @@ def test_cli_refuses_a_bad_interval_before_building(capsys):
 def test_the_interval_is_the_configurations():
     config = (resources.library_tree() / "plc_project" / "config.st").read_text()
     assert "INTERVAL := T#1ms" in config and TASK_INTERVAL_NS == 1_000_000
-    assert "INTERVAL := T#250us" in configuration_text(config, 250_000)
+    assert "INTERVAL := T#0.25ms" in configuration_text(config, 250_000)
     assert "INTERVAL := T#2ms" in configuration_text(config, 2_000_000)
     with pytest.raises(ValueError, match="expected one"):
         configuration_text(config.replace("TASK Cyclic", "TASK Other"), 250_000)
@@ -46,7 +46,7 @@ def test_the_interval_is_the_configurations():
     assert prepare(example(), EXAMPLE.name).committed
     p = prepare(example(), EXAMPLE.name, task_interval_ns=250_000)
     assert not p.committed and p.task_interval_ns == 250_000
-    assert "T#250us" in (p.root / "config.st").read_text() and '"config.st"' in p.entry.read_text()
+    assert "T#0.25ms" in (p.root / "config.st").read_text() and '"config.st"' in p.entry.read_text()
 
 
 def test_a_shorter_task_lifts_the_scan_bound_of_two_drives_at_1_mbit():

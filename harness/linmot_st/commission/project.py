@@ -64,7 +64,9 @@ def parse_task_interval(text: str) -> int:
 
 def configuration_text(config: str, interval_ns: int) -> str:
     """plc_project/config.st's text with the Cyclic task's INTERVAL set to interval_ns (whole microseconds)."""
-    literal = f"T#{interval_ns // 1_000_000}ms" if interval_ns % 1_000_000 == 0 else f"T#{interval_ns // 1_000}us"
+    # milliseconds with a decimal fraction: MatIEC (IEC 61131-3 ed. 2) knows no us or ns unit
+    ms, us = divmod(interval_ns // 1_000, 1_000)
+    literal = f"T#{ms}ms" if us == 0 else f"T#{ms}.{us:03d}".rstrip("0") + "ms"
     text, n = _TASK.subn(lambda m: m.group(1) + literal, config)
     if n != 1:
         raise ValueError(f"plc_project/config.st: {n} 'TASK Cyclic(INTERVAL := ...)' declarations, expected one")

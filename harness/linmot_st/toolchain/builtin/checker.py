@@ -782,6 +782,8 @@ class Checker:
             if pk == "INTERVAL":
                 if not (isinstance(value, A.Literal) and value.kind == "time"):
                     self.error(value.pos, "INTERVAL must be a duration literal such as T#10ms")
+                else:
+                    self.check_duration_units(value)      # a task's INTERVAL too (iec2c: "invalid task initialization")
                 if value.value <= 0:
                     self.error(value.pos, "INTERVAL must be positive")
                 interval = value.value
@@ -1229,13 +1231,17 @@ class Checker:
         e.ty = ty
         return ty
 
+    def check_duration_units(self, e: A.Literal) -> None:
+        if re.search(r"(?i)\d(us|ns)", e.text):
+            self.error(e.pos, f"{e.text}: the units us and ns are outside the supported subset (MatIEC knows d, h, m, "
+                              "s and ms: write T#0.25ms)")
+
     def infer_Literal(self, e: A.Literal) -> T.Type:
         tn = e.type_name
         if e.kind == "wstring":
             self.error(e.pos, "WSTRING literals are outside the supported subset")
-        if e.kind == "time" and re.search(r"(?i)\d(us|ns)", e.text):
-            self.error(e.pos, f"{e.text}: the units us and ns are outside the supported subset (MatIEC knows d, h, m, "
-                              "s and ms)")
+        if e.kind == "time":
+            self.check_duration_units(e)
         if e.kind == "string":
             self.check_string_escapes(e)
             self.check_string_ascii(e)
