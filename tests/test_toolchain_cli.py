@@ -162,6 +162,7 @@ def test_bench_verdicts():
     assert verdict(2_000_000, ">= 1000000") == "ok"
     assert verdict(6.0, "<= 5") == "MISS"
     assert verdict(1, None) == ""
+    assert verdict("failed: commissioned 14 of 16", ">= 50") == "MISS"     # a run that failed misses its target
 
 
 def test_missing_c_compiler_and_unwritable_cache_are_plain_errors(project, monkeypatch, capsys, tmp_path):

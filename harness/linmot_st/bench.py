@@ -32,8 +32,10 @@ def verdict(value, target) -> str:
     if target is None:
         return ""
     m = _TARGET.match(str(target))
-    if not m or not isinstance(value, (int, float)):
+    if not m:
         return ""
+    if not isinstance(value, (int, float)):
+        return "MISS"                  # no figure where one was due (the measured run failed)
     op, limit = m[1], float(m[2].replace("_", ""))
     ok = {"<=": value <= limit, ">=": value >= limit, "<": value < limit, ">": value > limit,
           "==": value == limit}[op]

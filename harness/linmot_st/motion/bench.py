@@ -69,8 +69,13 @@ def run() -> list[dict]:
     for axes in TARGETS:
         n = min(axes, MAX_AXES)
         label = f"{n} axes" if n == axes else f"{n} axes (plc_project's maximum; the target is for {axes})"
-        fast = measure(n)
-        slow = measure(n, fast_idle=False)
+        try:
+            fast = measure(n)
+            slow = measure(n, fast_idle=False)
+        except RuntimeError as exc:     # a run that fails is a figure too (docs/commissioning.md, "Known limits")
+            rows.append(dict(name=f"`make demo` simulated / wall time, {label}", value=f"failed: {exc}", unit="",
+                             target=f">= {TARGETS[axes]:g}"))
+            continue
         rows.append(dict(name=f"`make demo` simulated / wall time, {label}, idle scans in C "
                               f"({fast['idle_scans']:,} of {fast['scans']:,} scans, {fast['frames']:,} frames)",
                          value=round(fast["ratio"], 1), unit="x", target=f">= {TARGETS[axes]:g}"))
