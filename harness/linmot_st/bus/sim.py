@@ -239,7 +239,8 @@ class SimBus:
     # -- running ----------------------------------------------------------------------------
     def _read_timer(self, part: _Part) -> None:
         t = part.node.next_timer_ns()
-        part.timer = None if t is None else max(int(t), self.now)
+        now = self.now                      # max(int(t), now) without the builtin's call: after every timer
+        part.timer = None if t is None else (int(t) if t > now else now)
 
     def _submit(self, part: _Part, ready: int, frame: Frame) -> None:
         if ready < self.now:
