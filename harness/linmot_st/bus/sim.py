@@ -324,7 +324,7 @@ class SimBus:
                 t_arb = ready if ready > self._idle_at else self._idle_at
                 if t_arb < t_next and t_arb < t_end:
                     t_next, kind = t_arb, 3
-            if kind < 0 or t_next > t_end:
+            if t_next > t_end:              # also when nothing is pending (kind -1: t_next is t_end + 1)
                 break
             self.now = t_next
             if kind == 0:
