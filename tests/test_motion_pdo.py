@@ -240,3 +240,25 @@ def test_mapping_is_read_when_entering_operational():
     link.nmt(0x01)
     link.advance(MS)
     assert len(link.pdos(3)) == 1
+
+
+
+@pytest.mark.parametrize("position, demand, acceleration, scale, expected", [
+    (1234.5, -987.5, 0.0, 1000, (1, 0, -1)),                    # in range: the common case
+    (50_000_000.0, -50_000_000.0, 0.0, 1000, (32767, 0, -32768)),   # both positions saturate
+    (10.0, 20.0, 1e12, 1000, (0, 32767, 0)),                     # the demand current saturates
+    (-40_000.0, 40_000.0, -1e12, 0, (-32768, -32768, 32767)),    # scale 0 counts as 1
+])
+def test_txpdo2_default_content_is_the_mc_variables(position, demand, acceleration, scale, expected):
+    """TxPDO2's packer (on every SYNC, its own arithmetic for speed) gives what variable() gives, saturated
+    alike: motion command status, actual position 16 bit, demand current, demand position 16 bit."""
+    d = drive()
+    mc = d.mc
+    mc.running = mc.controlled = True
+    mc.last_header = 0x0123
+    mc.axis.physical, mc.axis.offset, mc.axis.acceleration = position - 3.0, 3.0, acceleration
+    mc.dem_p = demand
+    d.params[0x14C0].ram = scale
+    words = struct.unpack("<Hhhh", mc.txpdo2_payload())
+    assert words == (0x0123, *expected)
+    assert words[1:] == (mc.variable(0x1B95), mc.variable(0x1B93), mc.variable(0x1B94))

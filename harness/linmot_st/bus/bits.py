@@ -97,31 +97,52 @@ def _crc_table() -> list[int]:
 
 
 _CRC8 = _crc_table()
+
+# The stuffing state and the stuff bits counted so far as one object, a row: row[byte] is the row after that
+# data byte, row[256] = (stuff bits so far, state). A data byte then costs one subscript (the bus computes
+# the length of every frame whose payload it has not seen, e.g. each TxPDO2 of a moving axis).
+_MAX_STUFFED = (19 + 64 - 1) // 4       # stuff bits up to the last data bit: at most one per 4 after the first
+
+
+def _count_rows() -> list[list[list]]:
+    rows = [[[None] * 256 + [(c, s)] for s in range(10)] for c in range(_MAX_STUFFED + 1)]
+    for c, by_state in enumerate(rows):
+        for s, row in enumerate(by_state):
+            for byte, (n, after) in enumerate(_STUFF8[s]):
+                if c + n <= _MAX_STUFFED:       # beyond: no frame gets there
+                    row[byte] = rows[c + n][after]
+    return rows
+
+
+_ROWS = _count_rows()
 _HEADERS: dict[int, tuple[int, int, int]] = {}   # header key -> (crc, stuff state, stuff bits so far)
 
 
 def _header(can_id: int, rtr: bool, dlc: int) -> tuple[int, int, int]:
-    key = (can_id << 5) | (rtr << 4) | dlc
-    cached = _HEADERS.get(key)
-    if cached is None:
-        bits = [0] + _bits(can_id, 11) + [1 if rtr else 0, 0, 0] + _bits(dlc, 4)
-        stuffed, state = 0, 0
-        for bit in bits:
-            n, state = _advance(state, bit, 1)
-            stuffed += n
-        cached = _HEADERS[key] = (crc15(bits), state, stuffed)
-    return cached
+    bits = [0] + _bits(can_id, 11) + [1 if rtr else 0, 0, 0] + _bits(dlc, 4)
+    stuffed, state = 0, 0
+    for bit in bits:
+        n, state = _advance(state, bit, 1)
+        stuffed += n
+    return crc15(bits), state, stuffed
 
 
 def stuff_bit_count(frame: Frame) -> int:
     """Number of stuff bits the transmitter inserts into this frame."""
-    crc, state, stuffed = _header(frame.can_id, frame.rtr, frame.dlc)
-    if not frame.rtr:
-        stuff8, crc8 = _STUFF8, _CRC8
-        for byte in frame.data:
-            crc = ((crc << 8) & 0x7FFF) ^ crc8[((crc >> 7) ^ byte) & 0xFF]
-            n, state = stuff8[state][byte]
-            stuffed += n
+    can_id, rtr, data = frame.can_id, frame.rtr, frame.data
+    dlc = frame.rtr_dlc if rtr else len(data)       # frame.dlc without the property's call
+    key = (can_id << 5) | (rtr << 4) | dlc
+    header = _HEADERS.get(key)
+    if header is None:
+        header = _HEADERS[key] = _header(can_id, rtr, dlc)
+    crc, state, stuffed = header
+    if not rtr:
+        crc8 = _CRC8
+        row = _ROWS[stuffed][state]
+        for byte in data:
+            crc = ((crc << 8) & 0x7FFF) ^ crc8[(crc >> 7) ^ byte]     # (crc >> 7) ^ byte < 256: crc is 15-bit
+            row = row[byte]
+        stuffed, state = row[256]
     n, state = _STUFF7[state][crc >> 8]
     stuffed += n
     n, state = _STUFF8[state][crc & 0xFF]

@@ -239,7 +239,8 @@ class SimBus:
     # -- running ----------------------------------------------------------------------------
     def _read_timer(self, part: _Part) -> None:
         t = part.node.next_timer_ns()
-        part.timer = None if t is None else max(int(t), self.now)
+        now = self.now                      # max(int(t), now) without the builtin's call: after every timer
+        part.timer = None if t is None else (int(t) if t > now else now)
 
     def _submit(self, part: _Part, ready: int, frame: Frame) -> None:
         if ready < self.now:
@@ -323,7 +324,7 @@ class SimBus:
                 t_arb = ready if ready > self._idle_at else self._idle_at
                 if t_arb < t_next and t_arb < t_end:
                     t_next, kind = t_arb, 3
-            if kind < 0 or t_next > t_end:
+            if t_next > t_end:              # also when nothing is pending (kind -1: t_next is t_end + 1)
                 break
             self.now = t_next
             if kind == 0:

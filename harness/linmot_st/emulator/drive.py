@@ -275,7 +275,10 @@ class E1100Drive:
         if not out:
             return []
         self._out = []
-        return [(t if t > t_ns else t_ns, f) for t, f in out]
+        for t, _ in out:
+            if t < t_ns:
+                return [(t if t > t_ns else t_ns, f) for t, f in out]
+        return out                          # all ready at or after t_ns (a TxPDO2 on every SYNC): no copy
 
     def _operating_ms(self, t_ns: int) -> int:
         return self.profile.identity.operating_hours * 3_600_000 + t_ns // MS

@@ -73,10 +73,11 @@ _PLAIN_STATES = frozenset({W.READY_TO_OPERATE, W.OPERATION_ENABLED, W.ABORTING, 
 
 
 _TXPDO2 = struct.Struct("<HHHH")
+_CYCLE_TIME = itemgetter(0)     # the time of a cycle computed ahead (made once: _apply_ahead runs on every SYNC)
 
 
 def _s16(v: float) -> int:
-    x = round(v)                # an int for a float or an int (three times per TxPDO2, on every SYNC)
+    x = round(v)                # an int for a float or an int
     return -32768 if x < -32768 else 32767 if x > 32767 else x
 
 
@@ -125,6 +126,7 @@ class MotionControl:
         self._special_phase = 0
         self._next_tick: int | None = None
         self._ahead: list[tuple] = []
+        self._ahead_samples: list[Sample] = []     # their trajectory samples (a list of its own: no copying)
         self._last_tick = 0
         self._prev_vd = 0.0
         self._now = getattr(self, "_now", 0)
@@ -627,7 +629,7 @@ class MotionControl:
         computed ahead of it."""
         self._catch_up(t)
         if self._ahead:
-            self._ahead = []
+            self._ahead, self._ahead_samples = [], []
             self._horizon = 8           # disturbed: look less far ahead next time
 
     # ---- quiet cycles: plain motion, nothing for the state machine to do ----------------------------
@@ -645,9 +647,10 @@ class MotionControl:
                 and not self.ct_runner.running and not self.axis.blocked and not self.par(P_RANGE1_UPID)
                 and self._next_tick is not None and self.s.quiet_cycles)
 
-    def _quiet_run(self, t_limit: int, entries: list | None = None) -> bool:
+    def _quiet_run(self, t_limit: int, entries: list | None = None, samples: list | None = None) -> bool:
         """Commit quiet cycles from the next tick up to t_limit; True when any ran. It stops before the first
-        cycle that is not quiet: the generic cycle runs that one. `entries` collects each cycle's state.
+        cycle that is not quiet: the generic cycle runs that one. `entries` collects each cycle's state and
+        `samples` its trajectory sample (computing ahead); without them the samples go to the trajectory.
 
         The hottest loop of the model: the demand comes from the plan's `demands` walk, Axis.follow's
         arithmetic is inlined term for term (so every value is bit-identical to the generic cycle's; the
@@ -681,8 +684,11 @@ class MotionControl:
         lag_hi = lag_err if warn_bits & W.WARN_POS_LAG_ALWAYS else min(lag_warn, lag_err)
         sw, sv = self.words[0], self.words[1]
         record = self.s.record_trajectory
-        samples: list[Sample] = []
+        to_trajectory = samples is None
+        if to_trajectory:
+            samples = []
         new_sample = tuple.__new__          # Sample(...) without its Python-level __new__
+        add_sample, add_entry = samples.append, entries.append if entries is not None else None
         # Axis.follow, inlined (its constants, then its state in locals)
         h, offset = axis.h, axis.offset
         p00, p01, p10, p11 = axis._phi
@@ -696,9 +702,10 @@ class MotionControl:
         for p1, v1 in gen.demands(t, cyc):
             if t > t_limit:
                 break
-            e = p1 - (v1 - prev_vd) * h / 2 - prev_vd * h - (physical + offset)
+            dv = v1 - prev_vd                           # the same float in both terms: computed once
+            e = p1 - dv * h / 2 - prev_vd * h - (physical + offset)
             ed = prev_vd - velocity
-            u = one_kff * (v1 - prev_vd) / h
+            u = one_kff * dv / h
             ph1 = p1 - (p00 * e + p01 * ed + g0 * u) - offset
             if stop_neg <= ph1 <= stop_pos:
                 va1 = v1 - (p10 * e + p11 * ed + g1 * u)
@@ -730,14 +737,14 @@ class MotionControl:
             physical, velocity, acceleration = ph1, va1, ac1
             p = p1
             prev_vd = v1
-            sample = new_sample(Sample, (t, p1, pos, v1, va1, sv, sw)) if record else None
+            if record:
+                add_sample(new_sample(Sample, (t, p1, pos, v1, va1, sv, sw)))
             if entries is not None:
-                entries.append((t, ph1, va1, ac1, v1, p1, v1, since, sample))
-            elif record:
-                samples.append(sample)
+                add_entry((t, ph1, va1, ac1, v1, p1, v1, since))
             t += cyc
         axis.physical, axis.velocity, axis.acceleration = physical, velocity, acceleration
-        self.trajectory.extend(samples)
+        if to_trajectory:
+            self.trajectory.extend(samples)
         if t > t0:
             self.dem_p, self.dem_v, self._last_tick, self._now = p, prev_vd, t - cyc, t - cyc
         self._prev_vd, self._in_window_since, self._next_tick = prev_vd, since, t
@@ -750,11 +757,12 @@ class MotionControl:
             saved = (axis.physical, axis.velocity, axis.acceleration, self._prev_vd, self.dem_p, self.dem_v,
                      self._last_tick, self._next_tick, self._in_window_since, self._now)
             entries: list[tuple] = []
-            self._quiet_run(self._next_tick + (self._horizon - 1) * self.s.cycle_ns, entries)
+            samples: list[Sample] = []
+            self._quiet_run(self._next_tick + (self._horizon - 1) * self.s.cycle_ns, entries, samples)
             self._horizon = min(self._horizon * 2, self.AHEAD_MAX)
             (axis.physical, axis.velocity, axis.acceleration, self._prev_vd, self.dem_p, self.dem_v,
              self._last_tick, self._next_tick, self._in_window_since, self._now) = saved
-            self._ahead = entries
+            self._ahead, self._ahead_samples = entries, samples
         if self._ahead:
             return self._ahead[-1][0] + self.s.cycle_ns
         return None
@@ -762,12 +770,14 @@ class MotionControl:
     def _apply_ahead(self, t: int) -> None:
         """Take over the cycles computed ahead up to t."""
         ahead = self._ahead
-        k = bisect_right(ahead, t, key=itemgetter(0))
+        k = bisect_right(ahead, t, key=_CYCLE_TIME)
         if k:
-            if ahead[0][8] is not None:
-                self.trajectory.extend([e[8] for e in ahead[:k]])
+            samples = self._ahead_samples
+            if samples:
+                self.trajectory.extend(samples[:k])
+                del samples[:k]
             (tk, self.axis.physical, self.axis.velocity, self.axis.acceleration, self._prev_vd, self.dem_p,
-             self.dem_v, self._in_window_since, _) = ahead[k - 1]
+             self.dem_v, self._in_window_since) = ahead[k - 1]
             self._last_tick, self._next_tick, self._now = tk, tk + self.s.cycle_ns, tk
         del ahead[:k]
 
@@ -953,11 +963,18 @@ class MotionControl:
         """TxPDO2's default content ([CO1100] 5.1): motion command status (the last header), actual position
         16 bit, demand current, demand position 16 bit; the same values as variable(), packed in one call with
         a precomputed struct, as TxPDO2 goes on every SYNC."""
-        scale = max(self.par(P_SCALE_POS, 1000), 1)
+        # par() and max() without their calls: the same scale as position_16's
+        p = self._pars.get(P_SCALE_POS)
+        scale = 1000 if p is None else p.ram
+        if scale < 1:
+            scale = 1
         axis = self.axis
-        current = _s16(axis.demand_current_ma()) if self.running and self.controlled else 0
-        return _TXPDO2.pack(self.last_header, _s16((axis.physical + axis.offset) / scale) & 0xFFFF,
-                            current & 0xFFFF, _s16(self.dem_p / scale) & 0xFFFF)
+        actual, demand = round((axis.physical + axis.offset) / scale), round(self.dem_p / scale)
+        current = round(axis.demand_current_ma()) if self.running and self.controlled else 0
+        # _s16 only where a value is out of range (saturated): three calls fewer on every SYNC
+        if not (-32768 <= actual <= 32767 and -32768 <= demand <= 32767 and -32768 <= current <= 32767):
+            actual, demand, current = _s16(actual), _s16(demand), _s16(current)
+        return _TXPDO2.pack(self.last_header, actual & 0xFFFF, current & 0xFFFF, demand & 0xFFFF)
 
     def variable(self, upid: int) -> int | None:
         """The value of an MC variable now (SDO reads, TxPDOs by UPID); None: not a variable of the MC."""

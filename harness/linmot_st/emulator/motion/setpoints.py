@@ -61,7 +61,7 @@ class VaPlan:
     def demands(self, t_ns: int, step_ns: int):
         """(position, velocity) at t_ns, t_ns + step_ns, ...: `at`'s arithmetic, term for term (so the values
         are bit-identical), with the segment found by walking forward as time only grows."""
-        origin, end_s = self.origin_ns, self.end_s
+        origin, end_s, ns = self.origin_ns, self.end_s, NS      # NS in a local: read once per cycle
         segs = [(s.t, s.p, s.v, s.a) for s in self._segs]
         inf = float("inf")
         i = 0
@@ -69,7 +69,7 @@ class VaPlan:
             st, sp, sv, sa = segs[0]
             next_t = segs[1][0] if len(segs) > 1 else inf
         while segs:
-            t = (t_ns - origin) * NS
+            t = (t_ns - origin) * ns
             if t >= end_s:
                 break
             if t <= 0:
