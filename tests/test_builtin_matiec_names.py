@@ -64,7 +64,7 @@ def test_user_functions_named_like_standard_ones_are_not_called(backend, tmp_pat
 @pytest.mark.parametrize("name", NOT_NAMEABLE)
 def test_operators_and_clashing_names_stay_refused(name):
     with pytest.raises(BuiltinCompileError) as info:
-        check_text(source("FUNCTION", name))
+        check_text(source("function", name))
     message = info.value.diagnostics[0].message
     assert "standard function" in message or "reserved word" in message
 
@@ -81,6 +81,6 @@ def test_iec2c_takes_these_identifiers(name, place, tmp_path):
 @pytest.mark.matiec
 @pytest.mark.parametrize("name", NOT_NAMEABLE)
 def test_matiec_does_not_build_the_refused_function_names(name, tmp_path):
-    text = source("FUNCTION", name).replace("PROGRAM tn_main", "PROGRAM sn_main").replace("END_PROGRAM\n", "END_PROGRAM\n" + CONFIG)
+    text = source("function", name).replace("PROGRAM tn_main", "PROGRAM sn_main").replace("END_PROGRAM\n", "END_PROGRAM\n" + CONFIG)
     with pytest.raises(CompileError):
         build_text(text, tmp_path, "matiec")
