@@ -99,6 +99,24 @@ def test_one_node_sends_in_queue_order_only_its_head_competes():
     assert [e.frame.can_id for e in bus.trace] == [0x400, 0x600, 0x050]
 
 
+def test_a_node_with_several_transmit_buffers_sends_its_ready_frame_of_highest_priority_first():
+    """`tx_by_priority` (the emulated drive): a heartbeat queued first and starved by a busier node does not hold
+    up the SDO answer queued after it; frames not yet ready never overtake."""
+    prio = ScriptedNode([(0, Frame(0x705, b"\x05")), (0, Frame(0x585, b"\x60")), (10**6, Frame(0x181, b"\x01"))])
+    prio.tx_by_priority = True
+    bus = SimBus()
+    bus.attach(prio, "drive")
+    bus.attach(ScriptedNode([(0, Frame(0x600, b"\x01"))]), "busy")
+    bus.run_until(2_000_000)
+    assert [e.frame.can_id for e in bus.trace] == [0x585, 0x600, 0x705, 0x181]
+    fifo = ScriptedNode([(0, Frame(0x705, b"\x05")), (0, Frame(0x585, b"\x60"))])
+    bus = SimBus()
+    bus.attach(fifo, "drive")
+    bus.attach(ScriptedNode([(0, Frame(0x600, b"\x01"))]), "busy")
+    bus.run_until(2_000_000)
+    assert [e.frame.can_id for e in bus.trace] == [0x600, 0x705, 0x585]
+
+
 def test_run_until_delivers_frames_ending_at_t_but_leaves_a_start_at_t_open():
     bus = SimBus()
     plc = bus.endpoint("plc")

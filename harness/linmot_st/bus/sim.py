@@ -45,7 +45,7 @@ class _Part:
     """A participant's state on the bus."""
 
     __slots__ = ("name", "node", "latency", "queue", "timer", "order", "tec", "bus_off", "sent", "discarded",
-                 "has_timer", "observe", "hold_until")
+                 "has_timer", "observe", "hold_until", "by_priority")
 
     def __init__(self, name: str, node: Any, latency: int, order: int) -> None:
         self.name, self.node, self.latency, self.order = name, node, latency, order
@@ -60,6 +60,9 @@ class _Part:
         self.sent = 0
         self.discarded = 0
         self.hold_until = 0      # a FIFO delay holds the frames queued behind the delayed one until then
+        # a node with several transmit buffers sends its ready frame of highest priority first (the node says
+        # so: `tx_by_priority`); the others (the PLC's mailbox) send in the order they queued
+        self.by_priority = bool(getattr(node, "tx_by_priority", False))
 
 
 class Endpoint:
@@ -358,16 +361,24 @@ class SimBus:
 
     def _arbitrate(self, t: int) -> None:
         while True:
-            winner, best = None, 0x800
+            winner, best, at = None, 0x800, 0
             for p in self._parts:
                 q = p.queue
                 if q:
                     head = q[0]
-                    if head[0] <= t and head[2].can_id < best:
-                        winner, best = p, head[2].can_id
+                    if head[0] <= t:
+                        k = 0
+                        if p.by_priority:       # its ready frame of highest priority (the queue is by ready time)
+                            for i in range(1, len(q)):
+                                if q[i][0] > t:
+                                    break
+                                if q[i][2].can_id < q[k][2].can_id:
+                                    k = i
+                        if q[k][2].can_id < best:
+                            winner, best, at = p, q[k][2].can_id, k
             if winner is None:
                 return
-            frame = winner.queue.pop(0)[2]
+            frame = winner.queue.pop(at)[2]
             status = "ok"
             start_faults = self._stage["start"]
             if start_faults:

@@ -84,6 +84,12 @@ class E1100Drive:
     motion         MotionSettings: the motion model's choices (MC cycle, axis dynamics, stroke, windows)
     """
 
+    # On the simulated bus the drive's ready frames leave highest priority first, as from a CANopen stack with
+    # one transmit buffer per message kind (CANopenNode's CO_CANtx buffers are sent lowest index first, the
+    # heartbeat last): a heartbeat that loses arbitration on a busy bus then does not hold up an SDO answer
+    # (INFERRED: the E1100's controller is not documented; docs/emulator.md). False: one FIFO, in queue order.
+    tx_by_priority = True
+
     def __init__(self, node_id: int = 1, profile: DriveProfile | None = None, timings: DriveTimings | None = None,
                  *, protocol: ProtocolOptions | None = None, curve_capacity_bytes: int = 256 * 1024,
                  error_log: ErrorLog | None = None, motion: MotionSettings | None = None):
