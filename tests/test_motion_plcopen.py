@@ -16,7 +16,8 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
 from motionbench import MotionBench  # noqa: E402
-from plcopen_checks import (assert_exclusive, check_rising_edge_after_the_pulse, check_toggled_execute,  # noqa: E402
+from plcopen_checks import (assert_exclusive, check_done_held, check_one_scan_pulse,  # noqa: E402
+                            check_reset_on_falling_edge, check_rising_edge_after_the_pulse, check_toggled_execute,
                             outputs, run_recording)
 
 from linmot_st.emulator import Curve, build_entry  # noqa: E402
@@ -87,13 +88,9 @@ def test_done_held_while_execute_then_reset_on_falling_edge(spec):
     b = bench(spec)
     fb = b.fb(spec.name)
     fb.set(**spec.inputs)
-    states = run_recording(b, fb, execute_scans=None)
-    first = next(i for i, s in enumerate(states) if s[0])
-    assert all(s[1] for s in states[:first]) and all(s[0] and not s[1] for s in states[first:])
+    check_done_held(b, fb)
     active_only_while_busy(b, fb)
-    fb["EXECUTE"] = False
-    b.step(1)
-    assert outputs(fb) == (False, False, False, False, 0)
+    check_reset_on_falling_edge(b, fb)
 
 
 @pytest.mark.parametrize("spec", SPECS, ids=IDS)
@@ -101,10 +98,7 @@ def test_done_is_a_one_scan_pulse_when_execute_fell_before(spec):
     b = bench(spec)
     fb = b.fb(spec.name)
     fb.set(**spec.inputs)
-    states = run_recording(b, fb, execute_scans=1)
-    assert [s[0] for s in states].count(True) == 1
-    first = next(i for i, s in enumerate(states) if s[0])
-    assert states[first + 1:] == [(False, False, False, False, 0)] * (len(states) - first - 1)
+    check_one_scan_pulse(b, fb, 0)
 
 
 @pytest.mark.parametrize("spec", SPECS, ids=IDS)
@@ -134,9 +128,7 @@ def test_invalid_input_error_held_then_reset(spec):
     states = run_recording(b, fb, execute_scans=None)
     assert states[0][2] and states[0][4] != 0 and all(s[2] for s in states)
     assert rx_frames(b, t0, (0x301, 0x401)) == []
-    fb["EXECUTE"] = False
-    b.step(1)
-    assert outputs(fb) == (False, False, False, False, 0)
+    check_reset_on_falling_edge(b, fb)
 
 
 @pytest.mark.parametrize("spec", [s for s in SPECS if s.frames == (0x301,)],
@@ -147,11 +139,7 @@ def test_error_is_a_one_scan_pulse_when_execute_fell_before(spec):
     b.bus.drop(lambda f: f.can_id == 0x301)                      # the drive never gets the command
     fb = b.fb(spec.name)
     fb.set(**spec.inputs)
-    states = run_recording(b, fb, execute_scans=1)
-    assert [s[2] for s in states].count(True) == 1
-    first = next(i for i, s in enumerate(states) if s[2])
-    assert all(s[1] for s in states[:first])
-    assert states[first + 1:] == [(False, False, False, False, 0)] * (len(states) - first - 1)
+    check_one_scan_pulse(b, fb, 2)
 
 
 @pytest.mark.parametrize("spec", [s for s in SPECS if s.abortable], ids=[s.name for s in SPECS if s.abortable])
@@ -170,9 +158,7 @@ def test_a_newer_command_aborts_it(spec):
     assert s[3] and not s[1], s
     b.step(3)
     assert fb["COMMANDABORTED"]                                  # held while Execute stays TRUE
-    fb["EXECUTE"] = False
-    b.step(1)
-    assert outputs(fb) == (False, False, False, False, 0)
+    check_reset_on_falling_edge(b, fb)
     b.sim.run_until(lambda: newer["DONE"], max_scans=1000)       # the newer one runs to its end
 
 

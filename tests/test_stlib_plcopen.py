@@ -13,7 +13,8 @@ from typing import Callable
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
-from plcopen_checks import (assert_exclusive, check_rising_edge_after_the_pulse, check_toggled_execute,  # noqa: E402
+from plcopen_checks import (assert_exclusive, check_done_held, check_one_scan_pulse,  # noqa: E402
+                            check_reset_on_falling_edge, check_rising_edge_after_the_pulse, check_toggled_execute,
                             outputs, requests, run_recording)
 from stbench import VECTORS, Bench  # noqa: E402
 
@@ -95,13 +96,8 @@ def test_done_held_while_execute_then_reset_on_falling_edge(spec):
     b = bench(spec)
     fb = b.fb(spec.name)
     fb.set(**spec.inputs)
-    states = run_recording(b, fb, execute_scans=None)
-    first = next(i for i, s in enumerate(states) if s[0])
-    assert all(s[1] for s in states[:first]), "Busy from the Execute scan until Done"
-    assert all(s[0] and not s[1] for s in states[first:]), "Done held while Execute stays TRUE"
-    fb["EXECUTE"] = False
-    b.step(1)
-    assert outputs(fb) == (False, False, False, False, 0)
+    check_done_held(b, fb)
+    check_reset_on_falling_edge(b, fb)
 
 
 @pytest.mark.parametrize("spec", SPECS, ids=IDS)
@@ -109,11 +105,7 @@ def test_done_is_a_one_scan_pulse_when_execute_fell_before(spec):
     b = bench(spec)
     fb = b.fb(spec.name)
     fb.set(**spec.inputs)
-    states = run_recording(b, fb, execute_scans=1)
-    assert [s[0] for s in states].count(True) == 1
-    first = next(i for i, s in enumerate(states) if s[0])
-    assert all(s[1] for s in states[:first])
-    assert states[first + 1:] == [(False, False, False, False, 0)] * (len(states) - first - 1)
+    check_one_scan_pulse(b, fb, 0)
 
 
 @pytest.mark.parametrize("spec", SPECS, ids=IDS)
@@ -162,9 +154,7 @@ def test_invalid_input_error_held_then_reset(spec):
     assert states[0][2] and states[0][4] != 0                  # Error in the Execute scan itself
     assert all(s[2] for s in states)                           # held while Execute stays TRUE
     assert requests(b, t0) == []
-    fb["EXECUTE"] = False
-    b.step(1)
-    assert outputs(fb) == (False, False, False, False, 0)
+    check_reset_on_falling_edge(b, fb)
 
 
 @pytest.mark.parametrize("spec", SPECS, ids=IDS)
@@ -176,11 +166,7 @@ def test_error_is_a_one_scan_pulse_when_execute_fell_before(spec):
         b.bus.drop(lambda f: f.can_id == 0x701)
     fb = b.fb(spec.name)
     fb.set(**{**spec.inputs, **spec.fail})
-    states = run_recording(b, fb, execute_scans=1)
-    assert [s[2] for s in states].count(True) == 1
-    first = next(i for i, s in enumerate(states) if s[2])
-    assert all(s[1] for s in states[:first])
-    assert states[first + 1:] == [(False, False, False, False, 0)] * (len(states) - first - 1)
+    check_one_scan_pulse(b, fb, 2)
 
 
 @pytest.mark.parametrize("spec", [s for s in SPECS if s.abort], ids=[s.name for s in SPECS if s.abort])

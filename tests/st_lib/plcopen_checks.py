@@ -50,6 +50,33 @@ def run_recording(b: Bench, fb: Fb, execute_scans: int | None, max_scans: int = 
     raise AssertionError(f"{fb.name} did not finish")
 
 
+IDLE = (False, False, False, False, 0)
+
+
+def check_done_held(b: Bench, fb: Fb) -> None:
+    """Execute held TRUE: Busy from the Execute scan until Done, then Done held while Execute stays TRUE."""
+    states = run_recording(b, fb, execute_scans=None)
+    first = next(i for i, s in enumerate(states) if s[0])
+    assert all(s[1] for s in states[:first]), "Busy from the Execute scan until Done"
+    assert all(s[0] and not s[1] for s in states[first:]), "Done held while Execute stays TRUE"
+
+
+def check_reset_on_falling_edge(b: Bench, fb: Fb) -> None:
+    """Execute falls after the FB finished: every output is reset in that scan."""
+    fb["EXECUTE"] = False
+    b.step(1)
+    assert outputs(fb) == IDLE
+
+
+def check_one_scan_pulse(b: Bench, fb: Fb, which: int) -> None:
+    """Execute for one scan only: the end (which = 0 Done, 2 Error) shows for exactly one scan, Busy before."""
+    states = run_recording(b, fb, execute_scans=1)
+    assert [s[which] for s in states].count(True) == 1
+    first = next(i for i, s in enumerate(states) if s[which])
+    assert all(s[1] for s in states[:first])
+    assert states[first + 1:] == [IDLE] * (len(states) - first - 1)
+
+
 def finish_pulse(b: Bench, fb: Fb, max_scans: int = 5000) -> tuple:
     """Execute for one scan, then low until the FB shows its one-scan Done/Error pulse; returns that state."""
     fb["EXECUTE"] = True
