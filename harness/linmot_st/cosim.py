@@ -236,23 +236,25 @@ class CoSim:
     def _advance(self, limit: int, watch: Any) -> int:
         """Idle scans in C (at most `limit`) when the next scan is idle, else one scan from Python; returns
         the scans run."""
+        refreshed = False
         if self.fast_idle:
             k = self._idle(limit, watch)
-            if k:
+            if k > 0:
                 return k
-        self._scan()
+            refreshed = k < 0           # the bus has just read every node's timer: no need again
+        self._scan(refreshed)
         return 1
 
     def _idle(self, limit: int, watch: Any) -> int:
         """Up to `limit` idle scans in C when the next scan would receive nothing; returns the scans run (0:
-        the next scan is not idle)."""
+        the next scan is not idle; -1: not idle, and the bus's timers were read just now)."""
         plc, bus = self.plc, self.bus
         t = plc.time_ns
         if t < bus.now or self.endpoint.inbox or (self.echo and len(bus.trace) != self._trace_pos):
             return 0
         until = bus.next_event_ns(refresh=True)
         if until is not None and until <= t:
-            return 0
+            return -1
         mb = self.mailbox
         k = plc.step_idle(limit, (1 << 64) - 1 if until is None else until, mb._rx_count, mb._tx_count, watch)
         if not k:
@@ -271,13 +273,14 @@ class CoSim:
             send(f, t)
         self.frames_sent += len(frames)
 
-    def _scan(self) -> None:
-        """One scan stepped from Python: deliver, fill Rx, step, send."""
+    def _scan(self, refreshed: bool = False) -> None:
+        """One scan stepped from Python: deliver, fill Rx, step, send. `refreshed`: the bus read every node's
+        timer since the last event (nothing outside can have changed a node since)."""
         plc, bus, ep, mb = self.plc, self.bus, self.endpoint, self.mailbox
         t = plc.time_ns
         if t < bus.now:
             raise CoSimError(f"PLC time {t} ns is behind the bus ({bus.now} ns): was the PLC reset?")
-        bus.run_until(t)
+        bus.run_until(t, refresh=not refreshed)
         inbox = ep.inbox
         own = self._echoes() if self.echo else None
         if own:

@@ -2,7 +2,10 @@
 
 Participants are sans-I/O nodes (docs/architecture.md section 3) and endpoints (the PLC). Each has one
 transmit queue served in order of ready time (FIFO among equal times), like a CAN controller with one
-transmit buffer fed by a driver queue. Only the head of each queue competes for the bus.
+transmit buffer fed by a driver queue. Only the head of each queue competes for the bus. A node with
+`tx_by_priority` has one buffer per CAN-ID instead (its ready frame of lowest CAN-ID competes; a new frame
+of a CAN-ID whose frame is still unsent replaces it). A node with `rx_filter` (a set of CAN-IDs) is offered
+only those frames, as by a CAN controller's acceptance filter.
 
 Timing. A frame started at s ends at e = s + frame_length_bits * bit time (SOF..EOF, stuff bits
 included); receivers get it at e, the bus is free again at e + 3 bit times (interframe space).
@@ -45,7 +48,7 @@ class _Part:
     """A participant's state on the bus."""
 
     __slots__ = ("name", "node", "latency", "queue", "timer", "order", "tec", "bus_off", "sent", "discarded",
-                 "has_timer", "observe", "hold_until", "by_priority")
+                 "has_timer", "observe", "hold_until", "by_priority", "accepts", "filtered", "overwritten")
 
     def __init__(self, name: str, node: Any, latency: int, order: int) -> None:
         self.name, self.node, self.latency, self.order = name, node, latency, order
@@ -63,6 +66,11 @@ class _Part:
         # a node with several transmit buffers sends its ready frame of highest priority first (the node says
         # so: `tx_by_priority`); the others (the PLC's mailbox) send in the order they queued
         self.by_priority = bool(getattr(node, "tx_by_priority", False))
+        self.overwritten = 0     # frames that took the place of an unsent one of the same CAN-ID (by_priority)
+        # a node's acceptance filter (`rx_filter`: the CAN-IDs its on_frame reacts to, None: every frame), as
+        # a CAN controller's: the bus offers it no other frame. Read again after each event the node handled.
+        self.filtered = hasattr(node, "rx_filter")
+        self.accepts = getattr(node, "rx_filter", None)
 
 
 class Endpoint:
@@ -94,7 +102,7 @@ class Endpoint:
 
 
 class SimBus:
-    def __init__(self, bitrate: int = 500_000) -> None:
+    def __init__(self, bitrate: int = 500_000, *, rx_filters: bool = True) -> None:
         if not isinstance(bitrate, int) or bitrate <= 0 or 1_000_000_000 % bitrate:
             raise ValueError(f"bit rate {bitrate!r} must be a positive integer dividing 1e9 bit/s "
                              f"(e.g. one of {STANDARD_BITRATES})")
@@ -113,6 +121,9 @@ class SimBus:
         # frame length by (id, data, rtr, rtr_dlc): a tuple hashes in C, a Frame through its dataclass __hash__
         self._length_cache: dict[tuple, int] = {}
         self._stage: dict[str, list[Fault]] = {"queued": [], "start": [], "end": []}
+        # nodes' acceptance filters (`rx_filter`) are used; False offers every frame to every node (the
+        # reference the filtered runs are compared with: tests/test_bus_rx_filter.py)
+        self.rx_filters = rx_filters
 
     # -- participants -----------------------------------------------------------------------
     def attach(self, node: Any, name: str | None = None, latency_ns: int = 0) -> str:
@@ -127,6 +138,8 @@ class SimBus:
             raise ValueError(f"a participant named {name!r} is already on the bus")
         self._order += 1
         part = _Part(name, node, latency_ns, self._order)
+        if not self.rx_filters:
+            part.filtered, part.accepts = False, None
         self._parts.append(part)
         self._parts_by_name[name] = part
         self._read_timer(part)
@@ -244,6 +257,8 @@ class SimBus:
         t = part.node.next_timer_ns()
         now = self.now                      # max(int(t), now) without the builtin's call: after every timer
         part.timer = None if t is None else (int(t) if t > now else now)
+        if part.filtered:
+            part.accepts = part.node.rx_filter
 
     def _submit(self, part: _Part, ready: int, frame: Frame) -> None:
         if ready < self.now:
@@ -273,8 +288,18 @@ class SimBus:
                         part.hold_until = max(part.hold_until, ready)
         if ready < part.hold_until:
             ready = part.hold_until
-        self._seq += 1
         q = part.queue
+        if part.by_priority and q:
+            # one transmit buffer per CAN-ID: a frame whose buffer holds an unsent frame that was ready before
+            # it takes its place (CANopenNode copies a PDO's new data into its busy buffer and flags an
+            # overflow). Not one ready at the same time: a FIFO delay (a sequential server) holds that one.
+            cid = frame.can_id
+            for i, (r, seq, f) in enumerate(q):
+                if f.can_id == cid and r < ready:
+                    q[i] = (r, seq, frame)
+                    part.overwritten += 1
+                    return
+        self._seq += 1
         if not q or ready >= q[-1][0]:
             q.append((ready, self._seq, frame))
         else:
@@ -294,13 +319,16 @@ class SimBus:
             times.append(self._actions[0][0])
         return min(times) if times else None
 
-    def run_until(self, t_end: int) -> None:
-        """Advance virtual time to t_end, processing every event up to it (see the module doc)."""
+    def run_until(self, t_end: int, refresh: bool = True) -> None:
+        """Advance virtual time to t_end, processing every event up to it (see the module doc). `refresh`
+        False skips reading every node's timer first: for a caller that just did (next_event_ns(refresh=True))
+        and changed no node since."""
         if t_end < self.now:
             raise ValueError(f"run_until({t_end}): bus time is already {self.now} ns")
         parts = self._parts
         actions = self._actions
-        self._refresh_timers()
+        if refresh:
+            self._refresh_timers()
         while True:
             tx = self._tx
             # the earliest event; ties go to the first kind checked
@@ -351,6 +379,8 @@ class SimBus:
             if p.has_timer:
                 t = p.node.next_timer_ns()
                 p.timer = None if t is None else (t if t > now else now)
+                if p.filtered:
+                    p.accepts = p.node.rx_filter
 
     def _fire_timer(self, part: _Part, t: int) -> None:
         self._queue_all(part, t, part.node.on_timer(t))
@@ -434,14 +464,20 @@ class SimBus:
                     status = "mutated"
         self.trace.append(_new_tuple(TraceEntry, (start, end, part.name, frame, status)))   # no Python __new__
         now = self.now
+        cid = frame.can_id
         for p in self._parts:
             if p is not part:
+                accepts = p.accepts
+                if accepts is not None and cid not in accepts:
+                    continue                      # its acceptance filter: the node's state is untouched
                 node = p.node
                 out = node.on_frame(frame, end)
                 if out:
                     self._queue_all(p, end, out)
                 t = node.next_timer_ns()          # _read_timer, inlined: once per receiver and frame
                 p.timer = None if t is None else (int(t) if t > now else now)
+                if p.filtered:
+                    p.accepts = node.rx_filter
         if duplicate and self._parts_by_name.get(part.name) is part:
             self._requeue_first(part, end, sent)
 

@@ -13,6 +13,8 @@ injection on the SimBus).
 
 from __future__ import annotations
 
+import functools
+
 import time
 from dataclasses import dataclass, field
 from typing import Any, Callable
@@ -24,6 +26,7 @@ from .project import INSTANCE, MAILBOX, MAX_AXES
 PHASES = ("idle", "wait", "start", "check", "compare", "preflight", "params", "curves", "ct", "flash", "reset", "verify", "done")
 
 
+@functools.lru_cache(maxsize=None)      # the sampler asks for every axis before every scan
 def phase_name(enum_value: str) -> str:
     """LM_COM_PARAMS -> params."""
     return enum_value.removeprefix("LM_COM_").lower()

@@ -117,6 +117,11 @@ class E1100Drive:
         self.sdo = SdoServer(self.comm, self.mfr, lambda: self.nmt_state == PRE_OPERATIONAL)
         self.nmt_state = OFF
         self.now_ns = 0
+        # the COB-IDs on_frame can react to now (NMT, its SDO requests, and while Operational SYNC and its
+        # RxPDOs): the simulated bus offers the drive no other frame, as a CAN controller's acceptance filter
+        # (SimBus reads it after each event the drive handled; kept current in _take)
+        self._rx_base = frozenset((0x000, 0x600 + node_id))
+        self.rx_filter = self._rx_base
         self.lock = threading.RLock()      # held by the real-time server around each call (inspection may take it)
         self._events: list[_Event] = []
         self._seq = itertools.count()
@@ -277,6 +282,8 @@ class E1100Drive:
         self._out.append((t, Frame(can_id, data)))
 
     def _take(self, t_ns: int) -> list:
+        pdo = self.pdo                      # the end of every on_frame/on_timer: the filter as of now
+        self.rx_filter = pdo.rx_ids if pdo.operational else self._rx_base
         out = self._out
         if not out:
             return []

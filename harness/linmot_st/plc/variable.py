@@ -132,8 +132,31 @@ class RealVar(Var):
         self._c.value = v
 
 
+class EnumVar(Var):
+    """An enumerated variable: reads its value's name (the number itself when out of range), writes either."""
+
+    __slots__ = ("_c", "_names")
+
+    def __init__(self, target: Target, owner: Any = None):
+        super().__init__(target, owner)
+        self._c = ctypes.c_int.from_address(target.addr)
+        self._names = tuple(target.info.values)
+
+    @property
+    def value(self) -> Any:
+        i = self._c.value
+        names = self._names
+        return names[i] if 0 <= i < len(names) else i
+
+    @value.setter
+    def value(self, v: Any) -> None:
+        write_value(self._addr, self._info, v, self.path)
+
+
 def make_var(target: Target, owner: Any = None) -> Var:
     info = target.info
+    if info.kind == "enum":
+        return EnumVar(target, owner)
     if info.kind == "elementary":
         if info.name == "BOOL":
             return BoolVar(target, owner)

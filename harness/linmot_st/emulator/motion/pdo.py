@@ -69,6 +69,7 @@ class ProcessData:
         self.rx1_mode = self.rx3_mode = 0
         self.rx_on_sync = self.slave_used = self.cycle_sensitive = False
         self.sync_cob = 0x080
+        self.rx_ids: frozenset[int] = frozenset()
         self.operational = False
         self._sync_tx: list[_Tx] = []
         self._event_tx: list[_Tx] = []
@@ -113,6 +114,9 @@ class ProcessData:
         self._timed_tx = [tx for tx in self.tx if tx.inhibit_ns or tx.event_ns]
         self.slave_used = self.rx_cob[2] is not None and self.rx3_mode in (0, 1, 2)
         self.sync_cob = comm.value(0x1005) & 0x7FF
+        # what the drive accepts while Operational: NMT, its SDO requests and what handles() takes (its
+        # acceptance filter on the simulated bus, E1100Drive.rx_filter)
+        self.rx_ids = frozenset([0x000, 0x600 + d.node_id, self.sync_cob, *(c for c in self.rx_cob if c is not None)])
         self._rx_pending = [None, None, None]
         self.operational = True
         self._update_sensitivity()
