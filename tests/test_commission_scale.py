@@ -135,3 +135,25 @@ def test_pvl_option_missing_file(tmp_path, capsys):
 def test_motion_refuses_per_node_datasets(capsys):
     assert main(["motion", str(EXAMPLE), "-q", "--axes", "2", "--pvl", f"2={EXAMPLE}"]) == 2
     assert "--pvl" in capsys.readouterr().err
+
+
+def test_32_axes_at_500_kbits_with_real_timings_are_heard_after_their_reset_thanks_to_the_drain():
+    """The example dataset on 32 drives at 500 kbit/s with the drives' real timings (flash, reset, boot): while
+    the first axes verify, the bus is busy all the time and a boot-up message (700h + node, the lowest
+    priority) loses every arbitration. plc_project's drain (DrainEvery, CAN0.SdoHold) lets the bus go idle now
+    and then while an axis listens; without it the last axes fail with BootTimeout."""
+    from linmot_st.commission.project import INSTANCE
+    from linmot_st.commission.testing import project_build
+
+    build = project_build("builtin")
+    opts = RunOptions(axes=32, node_ids=NODES, bitrate=500_000, timings="real")
+    drained = run(example(), opts, build, after=lambda plc, sim, drives: plc[f"{INSTANCE}.DRAINS"])
+    assert all(a.done for a in drained.axes), [(a.node_id, a.error_id) for a in drained.axes if not a.done]
+    assert drained.after > 0                                    # the drains it took
+
+    def no_drain(plc):
+        plc[f"{INSTANCE}.DRAINEVERY"] = 0
+
+    plain = run(example(), opts, build, prepare_plc=no_drain)
+    failed = [a for a in plain.axes if not a.done]
+    assert failed and all(a.fail_phase == "reset" and a.error_id == 0x0305 for a in failed)   # BootTimeout

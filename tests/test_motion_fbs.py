@@ -476,6 +476,28 @@ def test_both_drives_move_in_parallel():
     assert abs(b.drives[2].mc.axis.position - 70 * MM) <= 1000
 
 
+def test_pdo_setup_waits_for_room_in_a_full_mailbox():
+    """Other axes of a shared mailbox fill Tx in the setup's scans: the NMT frames wait (a lost Enter
+    Pre-Operational left the drive Operational, refusing the PDO parameters with 08000022h; found at 17 axes
+    on one mailbox), then the setup runs in order and the drive is Operational again."""
+    b = MotionBench(nodes=1)
+    b["FILLTX"] = 32
+    setup = b.fb("SETUP")
+    t0 = b.plc.time_ns
+    setup.start(MODE="LM_PDO_SYNC", EVENTTIMERMS=0)
+    b.step(20)
+    assert setup["BUSY"] and not setup["ERROR"]
+    assert not [e for e in b.bus.trace if e.start_ns >= t0 and e.frame.can_id in (0x000, 0x601)]
+    b["FILLTX"] = 0
+    b.sim.run_until(lambda: setup["DONE"] or setup["ERROR"], max_scans=500)
+    assert setup["DONE"], setup["ERRORID"]
+    b.step(5)                                                    # the NMT Start of the last scan goes out
+    sent = [(e.frame.can_id, bytes(e.frame.data[:2])) for e in b.bus.trace
+            if e.start_ns >= t0 and e.frame.can_id in (0x000, 0x601)]
+    assert sent[0] == (0x000, bytes([0x80, 1])) and sent[-1] == (0x000, bytes([0x01, 1]))
+    assert [c.ttype for c in b.drive.pdo.tx][:2] == [1, 1] and b.drive.nmt_state == "OPERATIONAL"
+
+
 # ---------------------------------------------------------------- SYNC transmission, the library's SYNC producer
 def test_sync_mode_with_the_librarys_sync_producer():
     b = MotionBench(nodes=1, pdo={"PDOTIMEOUT": 50 * MS})
