@@ -129,7 +129,7 @@ def build(path: str | os.PathLike, backend: str = "auto", out: str | os.PathLike
         generator = [p for p in builtin_dir.rglob("*") if p.suffix in (".py", ".lark", ".c", ".h", ".json")]
         version_fn = getattr(builtin, "backend_version", None)
         backend_version = version_fn() if callable(version_fn) else "builtin-" + _code_digest(generator)[:16]
-        flags = []
+        flags = list(cc.BUILTIN_FLAGS)
 
     try:
         compiler = cc.find_compiler()
@@ -208,7 +208,8 @@ def _compile(chosen: str, tool, src: _sources.Sources, store: _cache.Cache, key:
                     "the values are the C compiler's")
         else:
             manifest, all_units, read = _builtin_generate(src, c_dir)
-            unit_flags, include_dirs, one_program = {}, [c_dir], all_units    # one program cut into units
+            unit_flags = {u: list(cc.BUILTIN_FLAGS) for u in all_units}
+            include_dirs, one_program = [c_dir], all_units      # one program cut into units
         (staging / _cache.MANIFEST_NAME).write_text(json.dumps(manifest, indent=1))
         generated_s = time.perf_counter() - t0
         loud = generated_s > PROGRESS_AFTER_S

@@ -17,14 +17,17 @@ from __future__ import annotations
 
 import math
 import re
+import struct
 from dataclasses import dataclass, field
+
+from . import types as T
 
 HIDDEN = '__attribute__((visibility("hidden")))'
 HEADER_NAME = "plc_builtin.h"
 
 # gcc's cost per character: a constant initialiser (the PVL dataset) is only parsed, about 1/12 of the
 # cost of a character of function code at -O1 (plc_project: 630 KB of code 1.8 s, a 1.8 MB dataset 0.45 s)
-DATA_DIVISOR = 12
+DATA_DIVISOR = {"data": 12, "string": 150}     # a string literal: about 0.07 s for a 3 MB dataset
 # ... and a long function costs more per character: plc_project's two longest (114 KB and 77 KB) about a
 # third more than its short ones; a chunk (one function, mostly) of n characters weighs n + n^2/this
 LONG_FUNCTION_CHARS = 150_000
@@ -41,12 +44,19 @@ MAX_UNITS = 2
 COPY_MAX_CHARS = 8_000
 
 _IDENT = re.compile(r"[A-Za-z_]\w*")
+# A constant array of 32-bit words of at least this many words is written as a string (dword_bytes)
+DWORD_STRING_MIN = 4096
+# C string escapes of each byte: three octal digits always (a digit after it cannot join it), '?' escaped
+# (no trigraph)
+_ESCAPES = [chr(b) if 32 <= b < 127 and chr(b) not in '"\\?' else f"\\{b:03o}" for b in range(256)]
+_BYTES_PER_LINE = 65_536
 
 
 @dataclass
 class Chunk:
     lines: list[str] = field(default_factory=list)
-    kind: str = "code"          # "code", "data" (a constant initialiser) or "copy" (a small FUNCTION)
+    kind: str = "code"          # "code", "copy" (a small FUNCTION), "data" (a constant initialiser) or
+                                # "string" (one written as a string literal)
     defs: dict[str, tuple[int, str]] = field(default_factory=dict)    # symbol -> (its line, header declaration)
 
     def define(self, symbol: str, line: str, decl: str | None = None) -> None:
@@ -59,8 +69,8 @@ class Chunk:
     def weight(self) -> int:
         """Its estimated gcc cost, in characters of function code (an int: sums in any order are equal)."""
         size = sum(len(line) + 1 for line in self.lines)
-        if self.kind == "data":
-            return size // DATA_DIVISOR
+        if self.kind in DATA_DIVISOR:
+            return size // DATA_DIVISOR[self.kind]
         return size + size * size // LONG_FUNCTION_CHARS
 
 
@@ -83,7 +93,7 @@ def split(head: list[str], chunks: list[Chunk], max_units: int | None = None) ->
     if n == 1:
         return _header(head, []), [_unit(chunks, range(len(chunks)), set())]
     owner = {sym: i for i, c in enumerate(chunks) for sym in c.defs}
-    uses = [set() if c.kind == "data" else {s for s in set(_IDENT.findall("\n".join(c.lines))) if s in owner}
+    uses = [set() if c.kind in DATA_DIVISOR else {s for s in set(_IDENT.findall("\n".join(c.lines))) if s in owner}
             for c in chunks]
     copies = [i for i, c in enumerate(chunks) if c.kind == "copy"]
     closure: dict[int, set[int]] = {}
@@ -141,3 +151,21 @@ def _unit(chunks: list[Chunk], members, out: set[str]) -> str:
         else:
             lines += c.lines
     return "\n".join(lines) + "\n"
+
+
+def dword_bytes(t: T.Type, value) -> bytes | None:
+    """The little-endian bytes of a long constant array of 32-bit unsigned words (a PVL dataset); None for
+    any other type or a shorter array."""
+    if not isinstance(t, T.Array) or not isinstance(value, list) or len(value) < DWORD_STRING_MIN:
+        return None
+    elem = t.elem.base()
+    if not (isinstance(elem, T.Elem) and elem.kind in ("uint", "bit") and elem.bits == 32):
+        return None
+    return struct.pack(f"<{len(value)}I", *value)
+
+
+def c_bytes(data: bytes) -> str:
+    """A C string literal of exactly these bytes (adjacent literals, one per line of _BYTES_PER_LINE)."""
+    text = data.decode("latin-1")
+    return "\n  ".join('"' + text[k:k + _BYTES_PER_LINE].translate(_ESCAPES) + '"'
+                       for k in range(0, len(text), _BYTES_PER_LINE))
