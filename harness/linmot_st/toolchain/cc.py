@@ -1,8 +1,10 @@
 """The C compiler: generated C + glue -> one shared library.
 
 Each translation unit is compiled in its own gcc process, all in parallel (the ~6k lines of headers each
-MatIEC unit includes dominate the time), then linked. gcc's diagnostics become a CompileError: with
-iec2c's `#line` directives they already point into the ST files.
+MatIEC unit includes dominate the time; the builtin backend cuts its C into units of equal size for
+this), then linked. The glue depends on nothing generated, so its gcc may start before the ST is
+translated (`start`). gcc's diagnostics become a CompileError: with iec2c's `#line` directives they
+already point into the ST files.
 """
 
 from __future__ import annotations
@@ -32,6 +34,11 @@ LARGE_UNIT_LINES = 40_000
 # ... and gcc collects its garbage more often there: a 48k-line unit peaked at 262 MB instead of 380 MB for
 # 14 % more CPU (a 100k-statement program: 1.2 GB before)
 LARGE_UNIT_MEMORY_FLAGS = ("--param", "ggc-min-expand=30", "--param", "ggc-min-heapsize=32768")
+# Flags of the builtin backend's units. gcc's dead store elimination and dominator optimisation cost its
+# C about a quarter of gcc's time (plc_project: 2.7 s -> 2.0 s of CPU), for no measurable cost per scan
+# (docs/toolchain.md, "Build speed"). Both are old gcc options; a compiler that does not know them (clang)
+# warns and goes on.
+BUILTIN_FLAGS = ["-fno-tree-dse", "-fno-tree-dominator-opts"]
 # -z defs: a symbol the generated C uses but never defines fails the link, not the later dlopen
 LINK_FLAGS = ["-shared", "-Wl,-z,defs", "-lm", "-ldl", "-lpthread", "-lrt"]   # -lrt: timer_create (glibc < 2.34)
 
@@ -119,30 +126,81 @@ def longest_function_lines(text: str) -> int:
     return longest
 
 
-def size_flags(unit: Path) -> list[str]:
+def size_flags(unit: Path, lines: int | None = None) -> list[str]:
     """Flags by the unit's size: -O0 for a unit longer than LARGE_UNIT_LINES or with a function longer
-    than LONG_FUNCTION_LINES."""
+    than LONG_FUNCTION_LINES. `lines`: count these lines instead of the unit's own (the whole program's,
+    for a unit cut from one program: cutting it does not change its optimisation level)."""
     try:
         text = Path(unit).read_text(errors="replace")
     except OSError:
         return []
-    big = text.count("\n") > LARGE_UNIT_LINES or longest_function_lines(text) > LONG_FUNCTION_LINES
+    if lines is None:
+        lines = text.count("\n")
+    big = lines > LARGE_UNIT_LINES or longest_function_lines(text) > LONG_FUNCTION_LINES
     if not big:
         return []
     return ["-O0", *(LARGE_UNIT_MEMORY_FLAGS if supports(LARGE_UNIT_MEMORY_FLAGS) else ())]
 
 
+def program_lines(units: list[Path]) -> int:
+    """The lines of units cut from one program, together (size_flags' `lines`)."""
+    total = 0
+    for unit in units:
+        try:
+            total += Path(unit).read_bytes().count(b"\n")
+        except OSError:
+            pass
+    return total
+
+
+class Started:
+    """One unit's gcc, started ahead of compile_shared (the glue's, while the ST is being translated)."""
+
+    def __init__(self, unit: Path, obj: Path, argv: list[str], cwd: Path | None):
+        self.unit, self.obj, self.argv = unit, obj, argv
+        self.proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=cwd)
+
+        self._result: subprocess.CompletedProcess | None = None
+
+    def result(self) -> subprocess.CompletedProcess:
+        if self._result is None:
+            out, err = self.proc.communicate()
+            self._result = subprocess.CompletedProcess(self.argv, self.proc.returncode, out, err)
+        return self._result
+
+    def cancel(self) -> None:
+        """Stop it if it still runs (the build failed before linking)."""
+        if self._result is None and self.proc.poll() is None:
+            self.proc.kill()
+        self.result()
+
+
+def start(units: list[Path], objdir: Path, *, cwd: Path | None = None, extra_flags: list[str] = ()) -> list[Started]:
+    """Start compiling units that include nothing generated (no -I) into objdir; compile_shared(started=)
+    links them. Flags as compile_shared gives them."""
+    cc = shlex.split(find_compiler().path)
+    out = []
+    for unit in units:
+        obj = objdir / (Path(unit).stem + ".o")
+        out.append(Started(unit, obj, [*cc, *BASE_FLAGS, *extra_flags, *size_flags(unit), "-c", str(unit),
+                                       "-o", str(obj)], cwd))
+    return out
+
+
 def compile_shared(units: list[Path], output: Path, *, include_dirs: list[Path] = (),
                    unit_flags: dict[Path, list[str]] | None = None, cwd: Path | None = None,
-                   extra_flags: list[str] = ()) -> None:
-    """Compile each unit (with its own extra flags) and link them into `output`."""
+                   extra_flags: list[str] = (), one_program: list[Path] = (),
+                   started: list[Started] = ()) -> None:
+    """Compile each unit (with its own extra flags) and link them into `output`, with the objects of the
+    `started` compiles. `one_program`: units cut from one program, sized together (size_flags)."""
     cc = shlex.split(find_compiler().path)
     objdir = output.parent
     incs = [f"-I{d}" for d in include_dirs]
+    together = program_lines(one_program) if len(one_program) > 1 else None
     jobs = []
     for unit in units:
         obj = objdir / (unit.stem + ".o")
-        flags = (unit_flags or {}).get(unit, []) + size_flags(unit)
+        flags = (unit_flags or {}).get(unit, []) + size_flags(unit, together if unit in one_program else None)
         jobs.append((unit, obj, [*cc, *BASE_FLAGS, *extra_flags, *flags, *incs, "-c", str(unit), "-o", str(obj)]))
 
     def run(job):
@@ -150,10 +208,12 @@ def compile_shared(units: list[Path], output: Path, *, include_dirs: list[Path] 
 
     with ThreadPoolExecutor(max_workers=max(1, min(len(jobs), os.cpu_count() or 1))) as pool:
         results = list(pool.map(run, jobs))
+    results += [((s.unit, s.obj, s.argv), s.result()) for s in started]
     failed = [(job, proc) for job, proc in results if proc.returncode != 0]
     if failed:
         raise _error(failed)
-    link = [*cc, *BASE_FLAGS, *extra_flags, *[str(obj) for _, obj, _ in jobs], "-o", str(output), *LINK_FLAGS]
+    link = [*cc, *BASE_FLAGS, *extra_flags, *[str(obj) for (_, obj, _), _ in results], "-o", str(output),
+            *LINK_FLAGS]
     proc = subprocess.run(link, capture_output=True, text=True, cwd=cwd, check=False)
     if proc.returncode != 0:
         raise _error([((None, None, link), proc)])

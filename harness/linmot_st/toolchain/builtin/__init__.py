@@ -5,8 +5,9 @@ Entry point for the build driver (linmot_st.toolchain):
     from linmot_st.toolchain.builtin import compile_to_c, BuiltinCompileError, backend_version
 
     out = compile_to_c(entry_file: Path, include_root: Path, out_dir: Path) -> BuiltinOutput
-        out.c_files   list[Path]  C files to compile (one translation unit); they #include out.header,
-                                  which sits next to them in out_dir (no -I needed)
+        out.c_files   list[Path]  the translation units to compile (plc_builtin.c, plc_builtin1.c, ...: one
+                                  or more by size, units.py); each #includes plc_builtin.h, which
+                                  #includes out.header; both sit next to them in out_dir (no -I needed)
         out.header    Path        builtin_rt.h, copied into out_dir
         out.manifest  Path        out_dir/manifest.json (docs/architecture.md 1.1)
         out.sources   list[Path]  every ST file read: the entry file first, then the {#include}d files
@@ -38,7 +39,7 @@ __all__ = ["compile_to_c", "compile_text", "BuiltinCompileError", "BuiltinOutput
 
 PACKAGE_DIR = Path(__file__).parent
 RUNTIME_HEADER = PACKAGE_DIR / "builtin_rt.h"
-C_FILE_NAME = "plc_builtin.c"
+C_FILE_NAME = "plc_builtin.c"      # the first unit; the others are plc_builtin1.c, plc_builtin2.c, ...
 
 
 @dataclass
@@ -65,16 +66,16 @@ def compile_to_c(entry_file: Path, include_root: Path, out_dir: Path, search: li
     from .loader import load
     entry_file, include_root, out_dir = Path(entry_file), Path(include_root), Path(out_dir)
     elements, sources, names = load(entry_file, include_root, search)
-    c_text, manifest = _translate(elements, names)
-    return _write(c_text, manifest, out_dir, sources)
+    header, units, manifest = _translate(elements, names)
+    return _write(header, units, manifest, out_dir, sources)
 
 
 def compile_text(text: str, out_dir: Path, name: str = "input.st") -> BuiltinOutput:
     """Compile ST source given as text (tests, tools); `name` is the file name diagnostics use."""
     from .parser import parse
     elements = parse(text, name)
-    c_text, manifest = _translate(elements, [name])
-    return _write(c_text, manifest, Path(out_dir), [])
+    header, units, manifest = _translate(elements, [name])
+    return _write(header, units, manifest, Path(out_dir), [])
 
 
 def check_text(text: str, name: str = "input.st"):
@@ -84,19 +85,23 @@ def check_text(text: str, name: str = "input.st"):
     return Checker().check(parse(text, name), [name])
 
 
-def _translate(elements, names) -> tuple[str, dict]:
+def _translate(elements, names) -> tuple[str, list[str], dict]:
     from .checker import Checker
     from .codegen import CodeGen
     prog = Checker().check(elements, names)
-    return CodeGen(prog, backend_version()).generate()
+    return CodeGen(prog, backend_version()).generate_units()
 
 
-def _write(c_text: str, manifest: dict, out_dir: Path, sources: list[Path]) -> BuiltinOutput:
+def _write(header_text: str, units: list[str], manifest: dict, out_dir: Path, sources: list[Path]) -> BuiltinOutput:
+    from .units import HEADER_NAME
     out_dir.mkdir(parents=True, exist_ok=True)
-    c_file = out_dir / C_FILE_NAME
-    c_file.write_text(c_text)
+    (out_dir / HEADER_NAME).write_text(header_text)
+    c_files = []
+    for k, text in enumerate(units):
+        c_files.append(out_dir / (C_FILE_NAME if k == 0 else C_FILE_NAME.replace(".c", f"{k}.c")))
+        c_files[-1].write_text(text)
     header = out_dir / RUNTIME_HEADER.name
     shutil.copyfile(RUNTIME_HEADER, header)
     mpath = out_dir / "manifest.json"
     mpath.write_text(json.dumps(manifest, indent=1))
-    return BuiltinOutput([c_file], header, mpath, sources)
+    return BuiltinOutput(c_files, header, mpath, sources)
