@@ -79,6 +79,14 @@ def test_one_transmit_buffer_per_can_id_keeps_the_newest_data_of_an_unsent_frame
     assert overwritten == 0
 
 
+def bus_with(filters: bool) -> type:
+    """SimBus with the nodes' filters on or off, for code that makes its own bus."""
+    class Bus(SimBus):
+        def __init__(self, bitrate=500_000, *, rx_filters=filters):
+            super().__init__(bitrate, rx_filters=rx_filters)
+    return Bus
+
+
 @pytest.mark.parametrize("axes", [2, 8])
 def test_the_demo_puts_the_same_frames_on_the_bus_with_and_without_the_drives_filters(monkeypatch, axes):
     """The demo's scenario (commissioning with real drive timings, then the motion steps; 8 axes load the bus
@@ -97,11 +105,7 @@ def test_the_demo_puts_the_same_frames_on_the_bus_with_and_without_the_drives_fi
     build = project_build("builtin")
     out = {}
     for filters in (False, True):
-        class Bus(SimBus):
-            def __init__(self, bitrate=500_000, *, rx_filters=filters):
-                super().__init__(bitrate, rx_filters=rx_filters)
-
-        monkeypatch.setattr(bus_pkg, "SimBus", Bus)
+        monkeypatch.setattr(bus_pkg, "SimBus", bus_with(filters))
         res = run(pvl, RunOptions(axes=axes, timings="real"), build, after=motion_phase(steps, 60.0))
         assert res.after is not None and res.after.finished
         out[filters] = res
@@ -121,11 +125,7 @@ def test_the_motion_bench_with_sync_is_the_same_with_and_without_the_drives_filt
 
     out = {}
     for filters in (False, True):
-        class Bus(SimBus):
-            def __init__(self, bitrate=500_000, *, rx_filters=filters):
-                super().__init__(bitrate, rx_filters=rx_filters)
-
-        monkeypatch.setattr(bench, "SimBus", Bus)
+        monkeypatch.setattr(bench, "SimBus", bus_with(filters))
         bus, master, drives = bench._setup(3)
         bus.run_until(master.moves_from + 1_500_000_000)
         out[filters] = ([(e.start_ns, e.sender, e.frame) for e in bus.trace],
