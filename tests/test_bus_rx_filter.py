@@ -87,6 +87,17 @@ def bus_with(filters: bool) -> type:
     return Bus
 
 
+def test_a_frame_still_in_the_nodes_latency_replaces_nothing():
+    """Two frames of one CAN-ID 50 us apart from a node with a 100 us latency, on an idle bus: the first is sent
+    before the second is ready (in the buffer), so both go."""
+    bus = SimBus()
+    node = ScriptedNode([(0, Frame(0x181, b"\x01")), (50_000, Frame(0x181, b"\x02"))])
+    node.tx_by_priority = True
+    bus.attach(node, "drive", latency_ns=100_000)
+    bus.run_until(5_000_000)
+    assert [e.frame.data for e in bus.trace] == [b"\x01", b"\x02"] and bus._part("drive").overwritten == 0
+
+
 @pytest.mark.parametrize("axes", [2, 8])
 def test_the_demo_puts_the_same_frames_on_the_bus_with_and_without_the_drives_filters(monkeypatch, axes):
     """The demo's scenario (commissioning with real drive timings, then the motion steps; 8 axes load the bus

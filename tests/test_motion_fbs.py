@@ -498,6 +498,19 @@ def test_pdo_setup_waits_for_room_in_a_full_mailbox():
     assert [c.ttype for c in b.drive.pdo.tx][:2] == [1, 1] and b.drive.nmt_state == "OPERATIONAL"
 
 
+def test_pdo_setup_fails_with_txfull_when_the_mailbox_stays_full():
+    """A mailbox that never has room: the setup ends with TxFull one SdoTimeout after its turn, having sent
+    nothing (the drive keeps its PDO parameters and stays Operational)."""
+    b = MotionBench(nodes=1)
+    b["FILLTX"] = 32
+    t0 = b.plc.time_ns
+    r = b.fb("SETUP").run(MODE="LM_PDO_SYNC", EVENTTIMERMS=0, max_scans=3000)
+    assert r.error and r.error_id == E["TxFull"], r
+    assert 0.99e9 <= b.plc.time_ns - t0 <= 1.1e9                # the channel's SdoTimeout (1 s)
+    assert not [e for e in b.bus.trace if e.start_ns >= t0 and e.frame.can_id in (0x000, 0x601)]
+    assert b.drive.nmt_state == "OPERATIONAL" and [c.ttype for c in b.drive.pdo.tx][:2] != [1, 1]
+
+
 # ---------------------------------------------------------------- SYNC transmission, the library's SYNC producer
 def test_sync_mode_with_the_librarys_sync_producer():
     b = MotionBench(nodes=1, pdo={"PDOTIMEOUT": 50 * MS})

@@ -258,7 +258,7 @@ class CoSim:
         mb = self.mailbox
         k = plc.step_idle(limit, (1 << 64) - 1 if until is None else until, mb._rx_count, mb._tx_count, watch)
         if not k:
-            return 0
+            return -1                   # the timers were read just now too
         self.scans += k
         self.idle_scans += k
         t_last = plc.time_ns - plc.tick_ns     # the start of the last scan: its frames are ready then

@@ -3,8 +3,8 @@
 Participants are sans-I/O nodes (docs/architecture.md section 3) and endpoints (the PLC). Each has one
 transmit queue served in order of ready time (FIFO among equal times), like a CAN controller with one
 transmit buffer fed by a driver queue. Only the head of each queue competes for the bus. A node with
-`tx_by_priority` has one buffer per CAN-ID instead (its ready frame of lowest CAN-ID competes; a new frame
-of a CAN-ID whose frame is still unsent replaces it). A node with `rx_filter` (a set of CAN-IDs) is offered
+`tx_by_priority` has one buffer per CAN-ID instead (its ready frame of lowest CAN-ID competes; a frame of a
+CAN-ID whose earlier frame is still unsent when it becomes ready replaces it). A node with `rx_filter` (a set of CAN-IDs) is offered
 only those frames, as by a CAN controller's acceptance filter.
 
 Timing. A frame started at s ends at e = s + frame_length_bits * bit time (SOF..EOF, stuff bits
@@ -66,7 +66,7 @@ class _Part:
         # a node with several transmit buffers sends its ready frame of highest priority first (the node says
         # so: `tx_by_priority`); the others (the PLC's mailbox) send in the order they queued
         self.by_priority = bool(getattr(node, "tx_by_priority", False))
-        self.overwritten = 0     # frames that took the place of an unsent one of the same CAN-ID (by_priority)
+        self.overwritten = 0     # frames overwritten in their buffer by a later one of their CAN-ID (by_priority)
         # a node's acceptance filter (`rx_filter`: the CAN-IDs its on_frame reacts to, None: every frame), as
         # a CAN controller's: the bus offers it no other frame. Read again after each event the node handled.
         self.filtered = hasattr(node, "rx_filter")
@@ -123,7 +123,7 @@ class SimBus:
         self._stage: dict[str, list[Fault]] = {"queued": [], "start": [], "end": []}
         # nodes' acceptance filters (`rx_filter`) are used; False offers every frame to every node (the
         # reference the filtered runs are compared with: tests/test_bus_rx_filter.py)
-        self.rx_filters = rx_filters
+        self._rx_filters = rx_filters      # read when a node is attached
 
     # -- participants -----------------------------------------------------------------------
     def attach(self, node: Any, name: str | None = None, latency_ns: int = 0) -> str:
@@ -138,7 +138,7 @@ class SimBus:
             raise ValueError(f"a participant named {name!r} is already on the bus")
         self._order += 1
         part = _Part(name, node, latency_ns, self._order)
-        if not self.rx_filters:
+        if not self._rx_filters:
             part.filtered, part.accepts = False, None
         self._parts.append(part)
         self._parts_by_name[name] = part
@@ -289,16 +289,6 @@ class SimBus:
         if ready < part.hold_until:
             ready = part.hold_until
         q = part.queue
-        if part.by_priority and q:
-            # one transmit buffer per CAN-ID: a frame whose buffer holds an unsent frame that was ready before
-            # it takes its place (CANopenNode copies a PDO's new data into its busy buffer and flags an
-            # overflow). Not one ready at the same time: a FIFO delay (a sequential server) holds that one.
-            cid = frame.can_id
-            for i, (r, seq, f) in enumerate(q):
-                if f.can_id == cid and r < ready:
-                    q[i] = (r, seq, frame)
-                    part.overwritten += 1
-                    return
         self._seq += 1
         if not q or ready >= q[-1][0]:
             q.append((ready, self._seq, frame))
@@ -389,6 +379,27 @@ class SimBus:
             raise RuntimeError(f"{part.name}: next_timer_ns() is still {part.timer} after on_timer({t}); "
                                f"a node must move its timer forward when it fires")
 
+    @staticmethod
+    def _overwrite(part: _Part, t: int) -> None:
+        """One transmit buffer per CAN-ID (a `tx_by_priority` node): of its frames ready by t, an earlier one of
+        a CAN-ID a later-ready one also has was overwritten in its buffer before the bus took it (CANopenNode
+        copies a PDO's new data into its busy buffer): dropped, counted. Frames ready at the same time stay (a
+        FIFO delay, a sequential server's late answer and the next, holds them so)."""
+        q = part.queue
+        n = 0
+        while n < len(q) and q[n][0] <= t:
+            n += 1
+        if n < 2:
+            return
+        newest: dict[int, int] = {}        # CAN-ID -> ready time of its latest-ready frame
+        for r, _, f in q[:n]:
+            newest[f.can_id] = r
+        if len(newest) == n:
+            return
+        kept = [e for e in q[:n] if e[0] >= newest[e[2].can_id]]
+        part.overwritten += n - len(kept)
+        q[:n] = kept
+
     def _arbitrate(self, t: int) -> None:
         while True:
             winner, best, at = None, 0x800, 0
@@ -399,6 +410,8 @@ class SimBus:
                     if head[0] <= t:
                         k = 0
                         if p.by_priority:       # its ready frame of highest priority (the queue is by ready time)
+                            if len(q) > 1:
+                                self._overwrite(p, t)
                             for i in range(1, len(q)):
                                 if q[i][0] > t:
                                     break

@@ -148,7 +148,7 @@ class E1100Drive:
         self.mc_phase = "stopped"
 
     def on_frame(self, frame, t_ns: int) -> list:
-        if t_ns > self.now_ns:              # max() without the builtin call: every frame on the bus comes here
+        if t_ns > self.now_ns:              # max() without the builtin call: every frame the filter lets in
             self.now_ns = t_ns
         if self.nmt_state in (OFF, BOOTING) or frame.rtr:
             return []
@@ -183,7 +183,10 @@ class E1100Drive:
         return self._take(t_ns)
 
     def observe(self, t_ns: int) -> None:
-        """Bring the inspectable state (drive.mc) to t_ns: the bus and DirectLink call it after running."""
+        """Bring the inspectable state (drive.mc) and the drive's clock to t_ns: the bus and DirectLink call it
+        after running (so that a call from outside, power_off, sees the bus's time, not its last frame's)."""
+        if t_ns > self.now_ns:
+            self.now_ns = t_ns
         self.mc.observe(t_ns)
 
     def inject_error(self, code: int, at_ns: int) -> None:

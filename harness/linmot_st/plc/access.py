@@ -176,6 +176,11 @@ def _describe(info: TypeInfo) -> str:
 
 # ---- values -------------------------------------------------------------------------------------------
 
+def enum_name(values, i: int) -> Any:
+    """An enumerated value's name; the number itself when it names none."""
+    return values[i] if 0 <= i < len(values) else i
+
+
 def read_value(addr: int, info: TypeInfo) -> Any:
     kind = info.kind
     if kind == "elementary":
@@ -190,8 +195,7 @@ def read_value(addr: int, info: TypeInfo) -> Any:
             return bytes(s.body[: min(s.len, STRING_CAPACITY)]).decode("latin-1")
         return info.ctype.from_address(addr).value
     if kind == "enum":
-        i = ctypes.c_int.from_address(addr).value
-        return info.values[i] if 0 <= i < len(info.values) else i
+        return enum_name(info.values, ctypes.c_int.from_address(addr).value)
     if kind in ("var", "ptr", "ref"):
         try:
             addr, info = _unwrap(addr, info, "")

@@ -9,7 +9,7 @@ from __future__ import annotations
 import ctypes
 from typing import Any
 
-from .access import FORCE_FLAG, Target, check_integer, read_value, write_value
+from .access import FORCE_FLAG, Target, check_integer, enum_name, read_value, write_value
 from .layout import INTEGER_RANGES
 
 
@@ -144,9 +144,7 @@ class EnumVar(Var):
 
     @property
     def value(self) -> Any:
-        i = self._c.value
-        names = self._names
-        return names[i] if 0 <= i < len(names) else i
+        return enum_name(self._names, self._c.value)
 
     @value.setter
     def value(self, v: Any) -> None:

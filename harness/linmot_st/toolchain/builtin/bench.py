@@ -14,12 +14,12 @@ import tempfile
 import time
 from pathlib import Path
 
-from ..cc import BUILTIN_FLAGS
+from ..cc import BASE_FLAGS, BUILTIN_FLAGS
 
 REPO = Path(__file__).resolve().parents[4]
 TESTBENCH = REPO / "tests" / "st_lib" / "testbench.st"
 TARGET_COLD_S = 5.0
-CFLAGS = ["-O1", "-g1", "-fPIC", "-Wno-unused-function", "-fno-strict-aliasing", *BUILTIN_FLAGS]   # as the build gives them
+CFLAGS = [*BASE_FLAGS, *BUILTIN_FLAGS]   # as the build gives them
 
 
 def synthetic(lines: int = 3000) -> str:

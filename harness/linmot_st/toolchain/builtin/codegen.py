@@ -120,6 +120,7 @@ class CodeGen:
         self.gflag_index: dict[str, int] = {}
         self.chunks: list[U.Chunk] = []
         self.pending_data: list[U.Chunk] = []     # constants of the chunk being generated: placed before it
+        self.data_names = 0                         # __data0, __data1 ...: one per constant chunk
 
     # ------------------------------------------------------------------ helpers
     def wrap(self, t: T.Type) -> str:
@@ -502,9 +503,10 @@ class CodeGen:
         if isinstance(tb, (T.Array, T.Struct)):
             if self.is_zero(val):
                 return f"  __builtin_memset(&{place}, 0, sizeof {place});"
-            name = f"__data{sum(len(c.defs) for c in self.chunks + self.pending_data if c.kind in U.DATA_DIVISOR)}"
+            name = f"__data{self.data_names}"        # taken (counted) only by a constant chunk below
             words = U.dword_bytes(tb, val)
             if words is not None:
+                self.data_names += 1
                 # as a string: gcc reads it about 6 times faster than the list of integers
                 data = U.Chunk(kind="string")
                 data.define(name, f"static const char {name}[{len(words)}] __attribute__((aligned(8))) = "
@@ -518,6 +520,7 @@ class CodeGen:
                                   "#endif"])
             init = self.c_init(tb, val)
             if len(init) > DATA_CHUNK_CHARS:
+                self.data_names += 1
                 data = U.Chunk(kind="data")
                 data.define(name, f"static const {cname_of(tb)} {name} = {init};",
                             f"extern {U.HIDDEN} const {cname_of(tb)} {name};")
