@@ -23,8 +23,8 @@ from __future__ import annotations
 import struct
 from typing import Callable
 
-from .control import (V_ACTUAL_POSITION_16, V_DEMAND_CURRENT, V_DEMAND_POSITION_16, V_LOGGED_ERROR,
-                      V_STATE_VAR, V_STATUS_WORD, V_WARN_WORD)
+from ...protocol.upids import (V_ACTUAL_POSITION_16, V_DEMAND_CURRENT, V_DEMAND_POSITION_16, V_LOGGED_ERROR,
+                               V_STATE_VAR, V_STATUS_WORD, V_WARN_WORD)
 
 # mapping parameters (interface layer; UPIDs INVENTED)
 P_TX_MODE = (0x2030, 0x2035, None)              # 0 = default content, 1 = by UPID (TxPDO3: always by UPID)
