@@ -20,9 +20,17 @@ def tools() -> Tools:
     if os.environ.get("LINMOT_ST_VCAN", "").strip().lower() in ("off", "native"):
         pytest.skip(f"LINMOT_ST_VCAN={os.environ['LINMOT_ST_VCAN']}: no guest")
     try:
-        return ensure()
+        tools = ensure()
     except Unavailable as exc:
         pytest.skip(f"no SocketCAN guest here: {exc}")
+    # a kernel that panics before its init runs cannot host any guest here (the reason names the kernel's own
+    # line); the runner's behaviour is tested where a guest boots
+    try:
+        Machine(tools).run(["true"], timeout_s=60)
+    except GuestStartError as exc:
+        if "cannot run on this host" in str(exc):
+            pytest.skip(f"no SocketCAN guest here: {exc}")
+    return tools
 
 
 def test_a_command_runs_in_the_guest_with_vcan_and_the_hosts_files(tools, tmp_path):
@@ -52,6 +60,15 @@ def test_a_guest_that_cannot_set_up_says_why_with_its_kernel_log(tools, tmp_path
 def test_the_command_is_stopped_at_its_timeout(tools, tmp_path):
     run = Machine(tools).run(["sleep", "60"], timeout_s=5, work_dir=tmp_path)
     assert run.timed_out and run.returncode is None and run.seconds < 20
+
+
+def test_a_kernel_panic_before_init_is_named_with_the_kernels_line():
+    from linmot_st.vcan.uml import _panic
+    log = ("Run /tmp/x/init as init process\nuserspace - ptrace set fp regs failed, errno = 14\n"
+           "Kernel panic - not syncing: Attempted to kill init! exitcode=0x0000000b\n Stack:\n")
+    assert _panic(log) == ("the kernel cannot run on this host: userspace - ptrace set fp regs failed, errno = 14"
+                           " -> Kernel panic - not syncing: Attempted to kill init! exitcode=0x0000000b")
+    assert _panic("Run /tmp/x/init as init process\n") == ""
 
 
 def test_no_apt_means_unavailable_with_the_reason(tmp_path, monkeypatch):

@@ -100,6 +100,18 @@ $B poweroff -f
 """
 
 
+def _panic(kernel_log: str) -> str:
+    """The kernel's own reason when it panicked before init ran, e.g. the UML kernels of Debian 12 and 13 on a
+    host whose CPU has AMX: 'userspace - ptrace set fp regs failed, errno = 14' (measured on these machines:
+    the host's extended FPU state does not fit what UML hands to ptrace), then 'Kernel panic'."""
+    lines = kernel_log.splitlines()
+    for i, line in enumerate(lines):
+        if line.startswith("Kernel panic"):
+            before = next((b.strip() for b in reversed(lines[:i]) if b.strip() and not b.startswith(" ")), "")
+            return f"the kernel cannot run on this host: {before + ' -> ' if before else ''}{line.strip()}"
+    return ""
+
+
 def _q(path: Path | str) -> str:
     return shlex.quote(str(path))
 
@@ -184,7 +196,7 @@ class Machine:
         kernel_log = (work / "kernel.log").read_text(errors="replace")
         if not (work / "started").exists():
             failed = [line[len(FAIL_MARK):] for line in kernel_log.splitlines() if line.startswith(FAIL_MARK)]
-            why = failed[0].strip() if failed else (
+            why = failed[0].strip() if failed else _panic(kernel_log) or (
                 "timed out before the command started" if timed_out else
                 f"the kernel stopped (exit status {proc.returncode}) before the command started")
             raise GuestStartError(f"User-Mode Linux guest: {why}", kernel_log)
