@@ -20,7 +20,7 @@ from pathlib import Path
 from . import cache as _cache
 from . import cc, sources as _sources
 from .backend import Backend, Generated, Rejected
-from .backends import BACKENDS, CHOICES, choose
+from .backends import BACKENDS, CHOICES, builtin_available, choose, matiec_available
 
 _TOOLCHAIN_DIR = Path(__file__).parent
 
@@ -62,14 +62,6 @@ class BuildResult:
     backend_version: str = ""
     warnings: list[str] = field(default_factory=list)
     c_dir: Path | None = None     # the generated C, kept for reading
-
-
-def matiec_available() -> bool:
-    return BACKENDS["matiec"].available()
-
-
-def builtin_available() -> bool:
-    return BACKENDS["builtin"].available()
 
 
 def choose_backend(backend: str = "auto") -> str:

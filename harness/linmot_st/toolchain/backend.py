@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Protocol
+from typing import Protocol, runtime_checkable
 
 from .sources import Sources
 
@@ -35,6 +35,7 @@ class Generated:
     sources_read: list[Path]              # the ST files the backend read (the cache entry's record)
 
 
+@runtime_checkable
 class Backend(Protocol):
     name: str
     found_note: str       # why `auto` chose it ("iec2c found")

@@ -14,8 +14,8 @@ CHOICES = (AUTO, *BACKENDS)      # what --backend accepts
 def choose(name: str = AUTO) -> Backend:
     """The backend of that name; `auto`: the first one that can run (the last one when none can, so the
     build reports why it cannot)."""
-    if name not in CHOICES:
-        raise ValueError(f"unknown backend {name!r}: choose one of {', '.join(CHOICES)}")
+    if name != AUTO and name not in BACKENDS:
+        raise ValueError(f"unknown backend {name!r}: choose one of {', '.join((AUTO, *BACKENDS))}")
     if name != AUTO:
         return BACKENDS[name]
     return next((b for b in BACKENDS.values() if b.available()), list(BACKENDS.values())[-1])
@@ -27,3 +27,11 @@ def auto_note(chosen: Backend) -> str:
     before = list(BACKENDS).index(chosen.name)
     passed = passed[:before]
     return ", ".join(passed) if passed else chosen.found_note
+
+
+def matiec_available() -> bool:
+    return BACKENDS["matiec"].available()
+
+
+def builtin_available() -> bool:
+    return BACKENDS["builtin"].available()
