@@ -19,7 +19,7 @@ import json
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-from .. import cache as _cache
+from .. import build, cache as _cache
 from .iec2c import find, version
 
 GUARD = 20     # more iterations than any probe loop runs under IEC semantics: a loop that goes on spins
@@ -114,7 +114,6 @@ def probe(cache_dir: Path | None = None) -> ForSemantics:
 
 def _measure(folder: Path, cache_dir: Path | None) -> ForSemantics:
     from linmot_st.plc import Plc
-    from .. import build      # the probe is a program built like any other
     source = folder / "for_probe.st"
     if not source.is_file() or source.read_text() != PROBE_ST:
         source.write_text(PROBE_ST)
