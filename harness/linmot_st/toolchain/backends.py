@@ -14,18 +14,17 @@ CHOICES = (AUTO, *BACKENDS)      # what --backend accepts
 def choose(name: str = AUTO) -> Backend:
     """The backend of that name; `auto`: the first one that can run (the last one when none can, so the
     build reports why it cannot)."""
-    if name != AUTO and name not in BACKENDS:
+    if name == AUTO:
+        return next((b for b in BACKENDS.values() if b.available()), list(BACKENDS.values())[-1])
+    if name not in BACKENDS:
         raise ValueError(f"unknown backend {name!r}: choose one of {', '.join((AUTO, *BACKENDS))}")
-    if name != AUTO:
-        return BACKENDS[name]
-    return next((b for b in BACKENDS.values() if b.available()), list(BACKENDS.values())[-1])
+    return BACKENDS[name]
 
 
 def auto_note(chosen: Backend) -> str:
     """Why `auto` chose this backend: the ones before it that cannot run, else that it can."""
-    passed = [b.missing_note for b in BACKENDS.values() if b is not chosen and not b.available()]
-    before = list(BACKENDS).index(chosen.name)
-    passed = passed[:before]
+    order = list(BACKENDS.values())
+    passed = [b.missing_note for b in order[:order.index(chosen)] if not b.available()]
     return ", ".join(passed) if passed else chosen.found_note
 
 
