@@ -182,12 +182,12 @@ def test_other_pragmas_keep_their_message():
 
 
 def test_a_missing_global_accessor_is_explained_as_such():
-    from linmot_st.toolchain import _explain_matiec_c_errors
+    from linmot_st.toolchain.matiec.backend import explain_c_errors
     line = "accessor.h:71:30: error: implicit declaration of function '__GET_GLOBAL_G1' [-Werror=implicit-function-declaration]"
-    notes = _explain_matiec_c_errors([line])[1:]
+    notes = explain_c_errors([line])[1:]
     assert len(notes) == 1 and "no VAR_GLOBAL G1 in the CONFIGURATION" in notes[0]
     wrapper = "x.c:9:5: error: implicit declaration of function '__MAIN_MOVE_INT2' [-Werror=implicit-function-declaration]"
-    assert "call wrapper" in _explain_matiec_c_errors([wrapper])[1]
+    assert "call wrapper" in explain_c_errors([wrapper])[1]
 
 
 # ---- MatIEC, where installed: what it does with each of these ------------------------------------------

@@ -9,9 +9,10 @@ import pytest
 
 from linmot_st.cli import main
 from linmot_st.plc import Plc
-from linmot_st.toolchain import build, for_semantics
-from linmot_st.toolchain.for_loops import warnings
-from linmot_st.toolchain.for_semantics import ForSemantics
+from linmot_st.toolchain import build
+from linmot_st.toolchain.matiec import for_semantics
+from linmot_st.toolchain.matiec.for_loops import warnings
+from linmot_st.toolchain.matiec.for_semantics import ForSemantics
 from linmot_st.toolchain.testing import requires_matiec, write_st
 
 HEAD = ForSemantics(once=False, past_end=False, spins=False, spins_by=True)

@@ -337,13 +337,14 @@ def test_failed_c_is_kept_for_reading_and_bounded(tmp_path, monkeypatch):
     """When gcc rejects generated C, the C stays in <cache>/failed-<key>/ (the last FAILED_KEPT builds) and
     the diagnostics point there, not into a deleted staging folder; a note names the ST entry."""
     import linmot_st.toolchain as toolchain
+    from linmot_st.toolchain.backend import Generated
 
-    def broken_generate(src, c_dir):
+    def broken_generate(src, c_dir, version):
         unit = c_dir / "broken.c"
         unit.write_text("int broken(void) { return undeclared_thing; }\n")
-        return {"schema": 1}, [unit], list(src.files)
+        return Generated({"schema": 1}, [unit], {unit: []}, [c_dir], [unit], list(src.files))
 
-    monkeypatch.setattr(toolchain, "_builtin_generate", broken_generate)
+    monkeypatch.setattr(toolchain.BACKENDS["builtin"], "generate", broken_generate)
     cache = tmp_path / "cache"
     for i in range(toolchain.FAILED_KEPT + 2):
         entry = write_st(f"PROGRAM Main\n  VAR i : INT; END_VAR\n  i := {i};\nEND_PROGRAM\n", tmp_path / f"p{i}")

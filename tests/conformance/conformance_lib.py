@@ -9,7 +9,7 @@ Each case is one file under cases/, an ST text whose first comment says what mus
       matiec-expect 1: N = 0; I = 5          ... and gives these values instead (left out of the
                                              differential comparison)
       matiec-expect[head] 1: N = 0           ... only under an iec2c with these FOR semantics
-                                             (toolchain/for_semantics.py: head, openplc, fixed, other)
+                                             (toolchain/matiec/for_semantics.py: head, openplc, fixed, other)
       matiec-fault[openplc] 1: kind 5        ... under such an iec2c, scan 1 ends in this PLC fault (5:
                                              the scan watchdog, for a loop that never ends); run alone
       interval: T#10ms                       the task interval (default T#10ms)

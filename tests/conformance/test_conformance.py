@@ -17,7 +17,7 @@ import pytest
 from conformance_lib import Case, all_cases, batch_source, single_source
 from linmot_st.plc import Plc, PlcFault
 from linmot_st.toolchain import CompileError, build
-from linmot_st.toolchain.for_semantics import probe
+from linmot_st.toolchain.matiec.for_semantics import probe
 from linmot_st.toolchain.testing import MATIEC_MISSING, matiec_available
 
 CASES = all_cases()

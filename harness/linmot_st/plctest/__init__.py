@@ -2,7 +2,7 @@
 
   rig.py        Rig / RealTimeRig: the user's PLC co-simulated against emulated E1100 drives, with the
                 helpers a test needs (step until a condition, expect an FB Done, variables, faults)
-  project.py    the user's project as the plugin sees it (ini options), and its builds
+  project.py    the user's project as the plugin sees it (ini options), its builds, project_of(config)
   stunit_lib.py the ST assertion library (st_lib/stunit/stunit.st) and how its failures read
   stunit.py     tests written in ST: discovery, the generated runner, one pytest item per test
   plugin.py     the pytest plugin (entry point pytest11 `linmot_st`): fixtures, markers, options

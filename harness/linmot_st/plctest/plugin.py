@@ -25,7 +25,10 @@ from pathlib import Path
 
 import pytest
 
-from .project import INI, Project
+from linmot_st.toolchain.backends import CHOICES
+
+from .project import INI, Project, project_of
+from .stunit import StFile
 
 MARKERS = [
     "each_backend: run the test once per available ST backend (matiec skipped where iec2c is missing)",
@@ -36,12 +39,11 @@ MARKERS = [
     "linmot_st: a test run by the linmot-st plugin",
     "st_test: a test written in ST",
 ]
-_PROJECT = pytest.StashKey[Project]()
 
 
 def pytest_addoption(parser):
     group = parser.getgroup("linmot-st", "testing PLC code with linmot-st")
-    group.addoption("--linmot-backend", dest="linmot_backend", default=None, choices=["auto", "matiec", "builtin"],
+    group.addoption("--linmot-backend", dest="linmot_backend", default=None, choices=CHOICES,
                     help="ST compiler for the project's builds (default: ini linmot_st_backend, else auto)")
     for name, (text, default) in INI.items():
         parser.addini(name, f"{text} (default {default})", default="")
@@ -50,12 +52,6 @@ def pytest_addoption(parser):
 def pytest_configure(config):
     for line in MARKERS:
         config.addinivalue_line("markers", line)
-
-
-def project_of(config) -> Project:
-    if _PROJECT not in config.stash:
-        config.stash[_PROJECT] = Project.from_config(config)
-    return config.stash[_PROJECT]
 
 
 # ---- markers -------------------------------------------------------------------------------------------
@@ -96,7 +92,6 @@ def pytest_collect_file(file_path: Path, parent):
         return None
     patterns = project_of(parent.config).st_files
     if any(fnmatch.fnmatch(file_path.name, p) for p in patterns):
-        from .stunit import StFile
         return StFile.from_parent(parent, path=file_path)
     return None
 

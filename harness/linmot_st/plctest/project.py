@@ -12,6 +12,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import pytest
+
 # ini name -> (help, default)
 INI = {
     "linmot_st_root": ("include root of the project's ST (default: the pytest rootdir)", ""),
@@ -84,3 +86,13 @@ class Project:
         if isinstance(got, Exception):
             raise got
         return got
+
+
+_PROJECT = pytest.StashKey[Project]()
+
+
+def project_of(config: Any) -> Project:
+    """The session's Project, made once from its config (the plugin's fixtures and the ST tests share it)."""
+    if _PROJECT not in config.stash:
+        config.stash[_PROJECT] = Project.from_config(config)
+    return config.stash[_PROJECT]

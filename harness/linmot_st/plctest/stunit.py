@@ -27,6 +27,7 @@ import pytest
 
 from linmot_st import resources
 
+from .project import project_of
 from .rig import Rig, format_frames
 from .stunit_lib import ST_PATH as STUNIT_LIB, describe_failure
 
@@ -129,7 +130,6 @@ class StItem(pytest.Item):
 
     @property
     def project(self):
-        from .plugin import project_of
         return project_of(self.config)
 
     def _entry(self) -> tuple[Path, bool]:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 
 def load_or_report(path: str, stream=None):
@@ -46,13 +47,39 @@ def _run_show(args: argparse.Namespace) -> int:
 
 
 def _add_to_st(p: argparse.ArgumentParser) -> None:
-    from .to_st import add_arguments
-    add_arguments(p)
+    from .to_st import DEFAULT_TYPE
+    p.add_argument("file", metavar="FILE", help="a .pvl file")
+    p.add_argument("-o", "--output", metavar="OUT.st", required=True, help="the ST file to write ('-' = stdout)")
+    p.add_argument("--type", dest="type_name", default=DEFAULT_TYPE, metavar="NAME",
+                   help=f"name of the generated ARRAY type (default {DEFAULT_TYPE})")
 
 
 def _run_to_st(args: argparse.Namespace) -> int:
-    from .to_st import run
-    return run(args)
+    from ..cliargs import check_output_file, error
+    from .dataset import DatasetError
+    from .to_st import read_st, to_st
+
+    if args.output != "-":
+        check_output_file(args.output, f"-o {args.output}")       # before any work; no folder is created
+    pvl = load_or_report(args.file)
+    if pvl is None:
+        return 1
+    try:
+        text = to_st(pvl, args.type_name)
+    except (DatasetError, ValueError) as err:
+        error(args, str(err))
+        return 1
+    if args.output == "-":
+        sys.stdout.write(text)
+    else:
+        out = Path(args.output)
+        try:
+            out.write_text(text)
+        except OSError as exc:
+            error(args, f"-o {args.output}: {exc.strerror or exc}")
+            return 1
+        print(f"{out}: {args.type_name}, {len(read_st(text)[1])} words", file=sys.stderr)
+    return 0
 
 
 COMMANDS = [

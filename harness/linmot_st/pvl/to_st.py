@@ -1,4 +1,4 @@
-"""`linmot-st pvl to-st FILE -o OUT.st`: a PVL file as ST data for the PLC (the commissioning dataset).
+"""A PVL file as ST data for the PLC (the commissioning dataset; the command `linmot-st pvl to-st` is in cli.py).
 
 The output is one TYPE: an `ARRAY[1..n] OF DWORD` whose initial value is the dataset stream of
 `linmot_st.pvl.dataset` (format and design: docs/commissioning.md). A PLC program declares a
@@ -13,10 +13,8 @@ the PVL content and the type name (not on paths), so a committed file can be che
 
 from __future__ import annotations
 
-import argparse
 import hashlib
 import re
-import sys
 from pathlib import Path
 
 from . import dataset as ds_format
@@ -129,39 +127,3 @@ def read_st(text: str) -> tuple[str, list[int]]:
     if len(words) != int(m.group(2)):
         raise ValueError(f"{m.group(1)}: {len(words)} words for ARRAY[1..{m.group(2)}]")
     return m.group(1), words
-
-
-# ---------------------------------------------------------------- the command
-
-def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("file", metavar="FILE", help="a .pvl file")
-    p.add_argument("-o", "--output", metavar="OUT.st", required=True, help="the ST file to write ('-' = stdout)")
-    p.add_argument("--type", dest="type_name", default=DEFAULT_TYPE, metavar="NAME",
-                   help=f"name of the generated ARRAY type (default {DEFAULT_TYPE})")
-
-
-def run(args: argparse.Namespace) -> int:
-    from ..cliargs import check_output_file, error
-    from .cli import load_or_report
-
-    if args.output != "-":
-        check_output_file(args.output, f"-o {args.output}")       # before any work; no folder is created
-    pvl = load_or_report(args.file)
-    if pvl is None:
-        return 1
-    try:
-        text = to_st(pvl, args.type_name)
-    except (ds_format.DatasetError, ValueError) as err:
-        error(args, str(err))
-        return 1
-    if args.output == "-":
-        sys.stdout.write(text)
-    else:
-        out = Path(args.output)
-        try:
-            out.write_text(text)
-        except OSError as exc:
-            error(args, f"-o {args.output}: {exc.strerror or exc}")
-            return 1
-        print(f"{out}: {args.type_name}, {len(read_st(text)[1])} words", file=sys.stderr)
-    return 0

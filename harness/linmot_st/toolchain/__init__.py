@@ -11,7 +11,6 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import re
 import shutil
 import sys
 import time
@@ -20,8 +19,9 @@ from pathlib import Path
 
 from . import cache as _cache
 from . import cc, sources as _sources
+from .backend import Backend, Generated, Rejected
+from .backends import BACKENDS, CHOICES, builtin_available, choose, matiec_available
 
-BACKENDS = ("auto", "matiec", "builtin")
 _TOOLCHAIN_DIR = Path(__file__).parent
 
 
@@ -64,26 +64,9 @@ class BuildResult:
     c_dir: Path | None = None     # the generated C, kept for reading
 
 
-def matiec_available() -> bool:
-    from . import matiec
-    return matiec.find() is not None
-
-
-def builtin_available() -> bool:
-    try:
-        from .builtin import compile_to_c  # noqa: F401
-    except ImportError:
-        return False
-    return True
-
-
 def choose_backend(backend: str = "auto") -> str:
     """`auto` is matiec when iec2c is found, else builtin."""
-    if backend not in BACKENDS:
-        raise ValueError(f"unknown backend {backend!r}: choose one of {', '.join(BACKENDS)}")
-    if backend != "auto":
-        return backend
-    return "matiec" if matiec_available() else "builtin"
+    return choose(backend).name
 
 
 def _code_digest(paths: list[Path]) -> str:
@@ -100,43 +83,25 @@ def build(path: str | os.PathLike, backend: str = "auto", out: str | os.PathLike
     the folder include paths resolve against (default: the nearest ancestor holding st_lib/linmot.st,
     else the current directory); a root without st_lib/ gets the library tree on its include path."""
     t0 = time.perf_counter()
-    chosen = choose_backend(backend)
+    chosen = choose(backend)
     try:
         src = _sources.collect(path, root=root)
     except _sources.SourceError as exc:
-        raise SourcePathError([f"error: {exc}"], chosen) from None
+        raise SourcePathError([f"error: {exc}"], chosen.name) from None
 
-    if chosen == "matiec":
-        from . import matiec
-        tool = matiec.find()
-        if tool is None:
-            raise CompileError([f"{src.entry}:1:1: error: backend matiec: iec2c not found "
-                                f"(set IEC2C or MATIEC_HOME, or put iec2c on PATH)"], chosen)
-        backend_version = matiec.version(tool)
-        # st_decls reads declarations with the builtin parser: its files shape the MatIEC manifest too
-        generator = [_TOOLCHAIN_DIR / "matiec.py", _TOOLCHAIN_DIR / "st_decls.py",
-                     *sorted((_TOOLCHAIN_DIR / "builtin").glob("*.py")), _TOOLCHAIN_DIR / "builtin" / "st.lark"]
-        flags = list(matiec.flags(tool.iec2c)) + _matiec_unit_flags()
-    else:
-        tool = None
-        try:
-            from . import builtin
-            from .builtin import compile_to_c  # noqa: F401
-        except ImportError as exc:
-            raise CompileError([f"{src.entry}:1:1: error: the builtin compiler is not available: {exc}"],
-                               chosen) from None
-        builtin_dir = _TOOLCHAIN_DIR / "builtin"
-        generator = [p for p in builtin_dir.rglob("*") if p.suffix in (".py", ".lark", ".c", ".h", ".json")]
-        version_fn = getattr(builtin, "backend_version", None)
-        backend_version = version_fn() if callable(version_fn) else "builtin-" + _code_digest(generator)[:16]
-        flags = list(cc.BUILTIN_FLAGS)
+    reason = chosen.missing()
+    if reason is not None:
+        raise CompileError([f"{src.entry}:1:1: error: {reason}"], chosen.name)
+    backend_version = chosen.version()
+    generator = chosen.generator_files()
+    flags = chosen.flags()
 
     try:
         compiler = cc.find_compiler()
     except cc.CCompileError as exc:
-        raise CompileError([f"error: {exc}"], chosen) from None
+        raise CompileError([f"error: {exc}"], chosen.name) from None
     key = _cache.make_key({
-        "backend": chosen,
+        "backend": chosen.name,
         "backend_version": backend_version,
         "generator": _code_digest(generator + [_TOOLCHAIN_DIR / "cc.py"]),
         "cc": compiler.version,
@@ -152,9 +117,9 @@ def build(path: str | os.PathLike, backend: str = "auto", out: str | os.PathLike
     entry = store.lookup(key) if use_cache else None
     cached = entry is not None
     if entry is None:
-        entry = _compile(chosen, tool, src, store, key, backend_version)
+        entry = _compile(chosen, src, store, key, backend_version)
     manifest = json.loads((entry / _cache.MANIFEST_NAME).read_text())
-    result = BuildResult(entry / _cache.LIBRARY_NAME, entry / _cache.MANIFEST_NAME, chosen, cached, src.entry,
+    result = BuildResult(entry / _cache.LIBRARY_NAME, entry / _cache.MANIFEST_NAME, chosen.name, cached, src.entry,
                          src.root, backend_version=backend_version, warnings=manifest.get("warnings", []),
                          c_dir=entry / "c")
     if out is not None:
@@ -176,7 +141,7 @@ def _c_lines(units: list[Path]) -> int:
     return sum(Path(u).read_bytes().count(b"\n") for u in units)
 
 
-def _compile(chosen: str, tool, src: _sources.Sources, store: _cache.Cache, key: str,
+def _compile(chosen: Backend, src: _sources.Sources, store: _cache.Cache, key: str,
              backend_version: str) -> Path:
     staging = store.staging()
     t0 = time.perf_counter()
@@ -186,42 +151,25 @@ def _compile(chosen: str, tool, src: _sources.Sources, store: _cache.Cache, key:
         c_dir.mkdir()
         # the glue includes nothing generated: its gcc runs while the ST is translated
         started = cc.start(cc.GLUE_SOURCES, staging, cwd=src.root)
-        if chosen == "matiec":
-            from . import matiec
-            try:
-                manifest, units, plain_units = matiec.generate(tool, src, c_dir, backend_version)
-            except matiec.MatiecError as exc:
-                raise CompileError(exc.diagnostics, chosen) from None
-            except Exception as exc:
-                raise _internal(exc, chosen, src) from exc
-            unit_flags = {u: _matiec_unit_flags() for u in units}
-            all_units, one_program = units + plain_units, []
-            include_dirs = [c_dir, tool.include]
-            read = list(src.files)
-            if not trap_flags_supported():
-                manifest.setdefault("warnings", []).append(
-                    "array indices are not checked: the C compiler has no trapping bounds sanitizer")
-            elif not cc.checks_undefined_values():
-                manifest.setdefault("warnings", []).append(
-                    "shift counts and REAL -> integer conversions are not checked: the C compiler has no "
-                    "UBSan shift-exponent/float-cast-overflow checks; where MatIEC's C leaves them undefined "
-                    "the values are the C compiler's")
-        else:
-            manifest, all_units, read = _builtin_generate(src, c_dir)
-            unit_flags = {u: list(cc.BUILTIN_FLAGS) for u in all_units}
-            include_dirs, one_program = [c_dir], all_units      # one program cut into units
+        try:
+            gen: Generated = chosen.generate(src, c_dir, backend_version)
+        except Rejected as exc:
+            raise CompileError(exc.diagnostics, chosen.name) from None
+        except Exception as exc:
+            raise _internal(exc, chosen.name, src) from exc
+        manifest, all_units, one_program = gen.manifest, gen.units, gen.one_program
         (staging / _cache.MANIFEST_NAME).write_text(json.dumps(manifest, indent=1))
         generated_s = time.perf_counter() - t0
         loud = generated_s > PROGRESS_AFTER_S
         if loud:
             together = cc.program_lines(one_program) if len(one_program) > 1 else None
             slow = [u.name for u in all_units if cc.size_flags(u, together if u in one_program else None)]
-            _progress(src, f"C generated by {chosen} in {generated_s:.1f} s ({_c_lines(all_units):,} lines in "
+            _progress(src, f"C generated by {chosen.name} in {generated_s:.1f} s ({_c_lines(all_units):,} lines in "
                            f"{len(all_units)} units); compiling with {Path(cc.find_compiler().path).name}"
                            + (f" (-O0 for the large {', '.join(slow)})" if slow else "") + " ...")
         try:
-            cc.compile_shared(all_units, staging / _cache.LIBRARY_NAME, include_dirs=include_dirs,
-                              unit_flags=unit_flags, cwd=src.root, one_program=one_program, started=started)
+            cc.compile_shared(all_units, staging / _cache.LIBRARY_NAME, include_dirs=gen.include_dirs,
+                              unit_flags=gen.unit_flags, cwd=src.root, one_program=one_program, started=started)
         except cc.CCompileError as exc:
             kept = _keep_failed(store, key, staging)
             text = str(exc)
@@ -229,17 +177,16 @@ def _compile(chosen: str, tool, src: _sources.Sources, store: _cache.Cache, key:
             if kept is not None:    # the staging folder is about to go: point into the kept copy
                 diags = [d.replace(str(staging), str(kept)) for d in diags]
                 text = text.replace(str(staging), str(kept))
-            if chosen == "matiec":
-                diags = _explain_matiec_c_errors(diags)
+            diags = chosen.explain_c_errors(diags)
             where = f"kept in {kept / 'c'}" if kept is not None else "not kept"
-            raise CompileError(diags + [f"note: the C compiler rejected the C that {chosen} generated from "
-                                        f"{src.entry_rel} (the C is {where})", text], chosen) from None
+            raise CompileError(diags + [f"note: the C compiler rejected the C that {chosen.name} generated from "
+                                        f"{src.entry_rel} (the C is {where})", text], chosen.name) from None
         if loud:
             _progress(src, f"compiled and linked in {time.perf_counter() - t0 - generated_s:.1f} s")
         for o in staging.glob("*.o"):
             o.unlink()
-        meta = {"backend": chosen, "backend_version": backend_version, "entry": str(src.entry),
-                "sources_read": {str(p): _cache.file_digest(p) for p in read}}
+        meta = {"backend": chosen.name, "backend_version": backend_version, "entry": str(src.entry),
+                "sources_read": {str(p): _cache.file_digest(p) for p in gen.sources_read}}
         return store.commit(key, staging, meta)
     except BaseException:
         for job in started:
@@ -273,62 +220,6 @@ def _internal(exc: BaseException, backend: str, src: _sources.Sources) -> Intern
         backend)
 
 
-# a global's accessor (__GET_GLOBAL_X, declared by the CONFIGURATION's VAR_GLOBAL X) is no call wrapper
-_MISSING_GLOBAL = re.compile(r"implicit declaration of function .__GET_GLOBAL_(\w+).")
-_MISSING_WRAPPER = re.compile(r"implicit declaration of function .__(?!GET_GLOBAL_)\w+?\d+.")
-
-
-def _explain_matiec_c_errors(diags: list[str]) -> list[str]:
-    """Add what is known about MatIEC defects that surface as C errors."""
-    missing = sorted({m[1] for d in diags for m in [_MISSING_GLOBAL.search(d)] if m})
-    if missing:
-        diags = diags + [
-            f"note: no VAR_GLOBAL {', '.join(missing)} in the CONFIGURATION (or no CONFIGURATION at all) for a "
-            "VAR_EXTERNAL of that name: iec2c accepts such a VAR_EXTERNAL, but its C then calls __GET_GLOBAL_<name>, "
-            "which only the global's declaration provides. Declare the global in the CONFIGURATION built with it."]
-    if any(_MISSING_WRAPPER.search(d) for d in diags):
-        diags = diags + [
-            "note: iec2c used a call wrapper it never defined (MatIEC defect: inside a FUNCTION_BLOCK, a "
-            "FUNCTION with VAR_IN_OUT called as an argument of another call, e.g. UDINT_TO_INT(F(Buf, 1)), "
-            "gets no wrapper and shifts the numbering of the later ones). Assign such a call's result to a "
-            "variable first, then convert it."]
-    return diags
-
-
-def _matiec_unit_flags() -> list[str]:
-    """Flags of the units iec2c wrote: an index out of range, a shift count out of range and an undefined
-    float -> integer conversion stop the scan (the glue reports kinds 2, 6 and 7); and since
-    MatIEC sometimes calls a helper it never declares (nor defines), an implicit `int` declaration, which
-    would compile into wrong code, is an error at the ST line."""
-    return cc.check_flags() + ["-Werror=implicit-function-declaration"]
-
-
-def trap_flags_supported() -> bool:
-    return bool(cc.check_flags())
-
-
-def _builtin_generate(src: _sources.Sources, c_dir: Path) -> tuple[dict, list[Path], list[Path]]:
-    """Run the builtin compiler; returns (manifest, C units, sources it read)."""
-    from . import builtin
-    error_cls = getattr(builtin, "BuiltinCompileError", ())
-    try:
-        out = builtin.compile_to_c(src.entry, src.root, c_dir, search=src.search)
-    except Exception as exc:
-        if error_cls and isinstance(exc, error_cls):
-            diags = [str(d) for d in (getattr(exc, "diagnostics", None) or [])] or str(exc).splitlines()
-            raise CompileError(diags, "builtin") from None
-        raise _internal(exc, "builtin", src) from exc
-    manifest = getattr(out, "manifest", None)
-    if isinstance(manifest, (str, Path)):
-        manifest = json.loads(Path(manifest).read_text())
-    if manifest is None:
-        manifest = json.loads((c_dir / "manifest.json").read_text())
-    units = getattr(out, "c_files", None) or getattr(out, "c_sources", None) or sorted(c_dir.glob("*.c"))
-    units = [Path(u) if Path(u).is_absolute() else c_dir / u for u in units]
-    read = [Path(p) for p in (getattr(out, "sources", None) or src.files)]
-    return manifest, units, read
-
-
 def _export(result: BuildResult, out: Path) -> BuildResult:
     """Copy the library, its manifest and the generated C into `out`."""
     out.mkdir(exist_ok=True)                  # the folder named, not its parents (checked by the CLI)
@@ -344,4 +235,5 @@ def say(message: str) -> None:
     print(message, file=sys.stderr)
 
 
-__all__ = ["build", "BuildResult", "CompileError", "SourcePathError", "InternalCompilerError", "choose_backend", "matiec_available", "builtin_available"]
+__all__ = ["build", "BuildResult", "CompileError", "SourcePathError", "InternalCompilerError", "choose_backend", "matiec_available",
+           "builtin_available", "Backend", "BACKENDS", "CHOICES"]

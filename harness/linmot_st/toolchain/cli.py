@@ -7,6 +7,7 @@ import sys
 import time
 
 from ..cliargs import int_range, non_negative_seconds
+from .backends import CHOICES
 
 RUN_CHUNK_S = 0.05      # `run` steps in C for about this long between two checks for Ctrl-C
 
@@ -42,7 +43,7 @@ def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--root", metavar="DIR", default=None,
                    help="the folder include paths resolve against (default: the nearest ancestor holding "
                         "st_lib/linmot.st, else the current folder)")
-    p.add_argument("--backend", choices=["auto", "matiec", "builtin"], default="auto",
+    p.add_argument("--backend", choices=CHOICES, default="auto",
                    help="auto: matiec when iec2c is found, else builtin (default)")
     p.add_argument("--verbose", action="store_true",
                    help="on an internal compiler error, also print its traceback (or set LINMOT_ST_TRACEBACK=1)")
@@ -59,11 +60,11 @@ def _build(args, out=None, use_cache=True):
     """The build result; raises _Failed after printing the diagnostics."""
     import os
 
-    from . import TRACEBACK_ENV, CompileError, InternalCompilerError, SourcePathError, build, choose_backend
-    chosen = choose_backend(args.backend)
-    if args.backend == "auto":
-        why = "iec2c found" if chosen == "matiec" else "iec2c not found"
-        print(f"backend: {chosen} (auto: {why})", file=sys.stderr)
+    from . import TRACEBACK_ENV, CompileError, InternalCompilerError, SourcePathError, build
+    from .backends import AUTO, auto_note, choose
+    if args.backend == AUTO:
+        chosen = choose(args.backend)
+        print(f"backend: {chosen.name} (auto: {auto_note(chosen)})", file=sys.stderr)
     try:
         res = build(args.path, backend=args.backend, out=out, use_cache=use_cache, root=args.root)
     except OSError as exc:      # the cache or output folder cannot be written, a source cannot be read...
@@ -96,15 +97,16 @@ def cmd_build(args) -> int:
     print(f"{res.entry}: {how} with {res.backend} in {res.seconds:.3f} s")
     print(f"  library:  {res.library}")
     print(f"  manifest: {res.manifest}")
-    if res.backend == "matiec":
-        _report_for_semantics(args)
+    for report in AFTER_BUILD.get(res.backend, ()):
+        report(args)
     return 0
 
 
 def _report_for_semantics(args) -> None:
     """Which FOR semantics this iec2c has, and the program's FOR loops that it changes (spec/matiec.md
     7.1): users' iec2c differ there."""
-    from . import cache as _cache, for_loops, for_semantics, sources as _sources
+    from . import cache as _cache, sources as _sources
+    from .matiec import for_loops, for_semantics
     src = _sources.collect(args.path, root=args.root)
     try:
         sem = for_semantics.probe(_cache.default_dir(src.root, src.writable_tree))
@@ -114,6 +116,10 @@ def _report_for_semantics(args) -> None:
     print(f"  {sem.describe()}")
     for line in for_loops.warnings(src.files, src.root, src.search, sem):
         print(line, file=sys.stderr)
+
+
+# what `build` adds to its report, by backend: users' iec2c differ in FOR
+AFTER_BUILD = {"matiec": [_report_for_semantics]}
 
 
 def _parse_value(text: str):

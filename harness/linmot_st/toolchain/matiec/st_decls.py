@@ -49,7 +49,7 @@ class Declarations:
 
 def _spec(node) -> TypeSpec:
     """The manifest-relevant shape of a type specification node of the builtin AST."""
-    from .builtin import ast as A
+    from ..builtin import ast as A
 
     if isinstance(node, A.NamedSpec):
         name = node.name.upper()
@@ -79,8 +79,8 @@ def _vars(blocks, target: dict[str, TypeSpec]) -> None:
 
 def scan(files: list[tuple[str, str]]) -> Declarations:
     """Declarations of the given (name, text) sources, in order (included files are given separately)."""
-    from .builtin import ast as A
-    from .builtin.parser import parse
+    from ..builtin import ast as A
+    from ..builtin.parser import parse
 
     decls = Declarations()
     for name, text in files:
@@ -101,5 +101,5 @@ def scan(files: list[tuple[str, str]]) -> Declarations:
 
 
 def scan_paths(paths: list[Path], root: Path, search: list[Path] = ()) -> Declarations:
-    from .builtin.loader import display_name, read_source
+    from ..builtin.loader import display_name, read_source
     return scan([(display_name(p, root, search), read_source(p)) for p in paths])

@@ -19,12 +19,13 @@ import json
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-from . import cache as _cache
+from .. import build, cache as _cache
+from .iec2c import find, version
 
 GUARD = 20     # more iterations than any probe loop runs under IEC semantics: a loop that goes on spins
 
 PROBE_ST = f"""\
-(* Which FOR semantics this iec2c has: linmot_st.toolchain.for_semantics *)
+(* Which FOR semantics this iec2c has: linmot_st.toolchain.matiec.for_semantics *)
 PROGRAM for_probe
   VAR i, j, n, m : INT; u : USINT; d : DINT; once, past_end, spins, spins_by : BOOL; END_VAR
   n := 0;
@@ -87,12 +88,11 @@ _memo: dict[str, ForSemantics] = {}
 
 
 def probe(cache_dir: Path | None = None) -> ForSemantics:
-    """Measure the FOR semantics of the iec2c the matiec backend would use (matiec.find())."""
-    from . import build, matiec
-    tool = matiec.find()
+    """Measure the FOR semantics of the iec2c the matiec backend would use (iec2c.find())."""
+    tool = find()
     if tool is None:
         raise RuntimeError("no iec2c found: set MATIEC_HOME or IEC2C, or put iec2c on PATH")
-    ident = matiec.version(tool)
+    ident = version(tool)
     if ident in _memo:
         return _memo[ident]
     folder = Path(cache_dir) if cache_dir else _cache.default_dir(Path.cwd(), in_tree=False)
@@ -114,7 +114,6 @@ def probe(cache_dir: Path | None = None) -> ForSemantics:
 
 def _measure(folder: Path, cache_dir: Path | None) -> ForSemantics:
     from linmot_st.plc import Plc
-    from . import build
     source = folder / "for_probe.st"
     if not source.is_file() or source.read_text() != PROBE_ST:
         source.write_text(PROBE_ST)

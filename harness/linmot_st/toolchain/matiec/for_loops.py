@@ -26,10 +26,10 @@ NOT_PROMOTED = {"DINT", "LINT", "UDINT", "ULINT"}     # C adds in the type itsel
 
 def warnings(paths: list[Path], root: Path, search: list[Path], sem: ForSemantics) -> list[str]:
     """`file:line:col: warning: ...` for each FOR that this iec2c's semantics changes."""
-    from .builtin import ast as A
-    from .builtin.errors import BuiltinCompileError
-    from .builtin.loader import display_name, read_source
-    from .builtin.parser import parse
+    from ..builtin import ast as A
+    from ..builtin.errors import BuiltinCompileError
+    from ..builtin.loader import display_name, read_source
+    from ..builtin.parser import parse
 
     if sem.iec:
         return []
