@@ -118,8 +118,9 @@ class E1100Drive:
         self.nmt_state = OFF
         self.now_ns = 0
         # the COB-IDs on_frame can react to now (NMT, its SDO requests, and while Operational SYNC and its
-        # RxPDOs): the simulated bus offers the drive no other frame, as a CAN controller's acceptance filter
-        # (SimBus reads it after each event the drive handled; kept current in _take)
+        # RxPDOs; bus/node.py): the simulated bus offers the drive no other frame and NodeServer makes it the
+        # python-can bus's receive filters, as a CAN controller's acceptance filter (both read it after each
+        # call into the drive; kept current in _take)
         self._rx_base = frozenset((0x000, 0x600 + node_id))
         self.rx_filter = self._rx_base
         self.lock = threading.RLock()      # held by the real-time server around each call (inspection may take it)
@@ -209,17 +210,6 @@ class E1100Drive:
         if other is not None and (t is None or other < t):
             t = other
         return t
-
-    def receive_ids(self) -> list[int]:
-        """The COB-IDs on_frame reacts to: NMT (000h), its SDO requests (600h+ID), SYNC (1005h) and its valid
-        RxPDOs (1400h..1402h). NodeServer makes them the bus's receive filters (a CAN controller's
-        acceptance filter), so a served drive is woken only for its own frames."""
-        ids = {0x000, 0x600 + self.node_id, self.comm.value(0x1005) & 0x7FF}
-        for n in range(3):
-            cob = self.comm.value(0x1400 + n, 1)
-            if not cob & 0x80000000:
-                ids.add(cob & 0x7FF)
-        return sorted(ids)
 
     # ------------------------------------------------------------------ inspection
     @property
