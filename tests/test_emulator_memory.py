@@ -15,7 +15,7 @@ from linmot_st.cli import main
 from linmot_st.commission.testing import commission
 from linmot_st.commission.verify import drive_state
 from linmot_st.emulator import OPERATIONAL, DriveTimings, E1100Drive
-from linmot_st.emulator.memory import FORMAT, dump, load, read, write
+from linmot_st.emulator.linmot.memory import FORMAT, dump, load, read, write
 from linmot_st.emulator.testing import DirectLink
 
 

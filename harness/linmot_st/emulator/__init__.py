@@ -8,12 +8,12 @@ docs/emulator.md describes the behaviour and every choice made where the sources
 """
 
 from .codes import SdoAbort
-from .command_table import CommandTable, build_entry
-from .curves import Curve, CurveStore
-from .drive import BOOTING, OFF, OPERATIONAL, PRE_OPERATIONAL, STOPPED, DriveTimings, E1100Drive
-from .errorlog import ErrorEntry, ErrorLog
-from .options import ProtocolOptions
-from .profile import DriveProfile, ParamDef, ProfileError, load_profile
+from .linmot.command_table import CommandTable, build_entry
+from .linmot.curves import Curve, CurveStore
+from .linmot.drive import BOOTING, OFF, OPERATIONAL, PRE_OPERATIONAL, STOPPED, DriveTimings, E1100Drive
+from .linmot.errorlog import ErrorEntry, ErrorLog
+from .linmot.options import ProtocolOptions
+from .linmot.profile import DriveProfile, ParamDef, ProfileError, load_profile
 
 __all__ = [
     "E1100Drive", "DriveTimings", "ProtocolOptions", "DriveProfile", "ParamDef", "ProfileError", "load_profile",

@@ -19,8 +19,8 @@ import time
 
 from ..bus import Frame
 from ..bus.bench import RequestLoop, run_loop
-from .curves import Curve
-from .drive import E1100Drive
+from .linmot.curves import Curve
+from .linmot.drive import E1100Drive
 from .motion import bench as motion_bench
 
 S = 1_000_000_000

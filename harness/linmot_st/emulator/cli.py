@@ -24,7 +24,7 @@ def register(subparsers) -> None:
                    help="stop after this many seconds (default: until interrupted)")
     p.add_argument("--dump-memory", metavar="FILE",
                    help="when stopped, write the drive's memory (parameters ROM and RAM, curves and command table "
-                        "in RAM and flash) to FILE as JSON (emulator/memory.py), to check what a PLC wrote")
+                        "in RAM and flash) to FILE as JSON (emulator/linmot/memory.py), to check what a PLC wrote")
     p.set_defaults(func=run)
 
 
@@ -44,8 +44,8 @@ def run(args: argparse.Namespace) -> int:
     import can
 
     from ..bus import open_bus, parse_bus_spec
-    from .drive import DriveTimings, E1100Drive
-    from .profile import ProfileError, load_profile
+    from .linmot.drive import DriveTimings, E1100Drive
+    from .linmot.profile import ProfileError, load_profile
 
     spec = f"{args.interface}:{args.channel}"
     try:
@@ -89,7 +89,7 @@ def run(args: argparse.Namespace) -> int:
             rc = _error(str(exc), 1)
         bus.shutdown()
         if args.dump_memory:
-            from .memory import write
+            from .linmot.memory import write
             try:
                 write(drive, args.dump_memory)
             except OSError as exc:

@@ -107,7 +107,7 @@ class EmulatedDrives:
     def memory(self, node: int) -> dict:
         """The node's memory as its process wrote it when stopped (emulator/memory.py)."""
         if node not in self._memory:
-            from linmot_st.emulator.memory import read
+            from linmot_st.emulator.linmot.memory import read
             path = self.work / f"drive{node}.json"
             if not path.exists():
                 raise FileNotFoundError(f"node {node} left no memory dump (exit status "
@@ -118,7 +118,7 @@ class EmulatedDrives:
     def drive(self, node: int):
         """An E1100Drive (the default profile, as `linmot-st emulate` serves it) holding the node's memory."""
         from linmot_st.emulator import E1100Drive
-        from linmot_st.emulator.memory import load
+        from linmot_st.emulator.linmot.memory import load
         drive = E1100Drive(node)
         load(drive, self.memory(node))
         return drive

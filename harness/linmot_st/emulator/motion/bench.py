@@ -17,8 +17,8 @@ import struct
 import time
 
 from ...bus import Frame, SimBus
-from ..drive import DriveTimings, E1100Drive
-from ..profile import load_profile
+from ..linmot.drive import DriveTimings, E1100Drive
+from ..linmot.profile import load_profile
 from . import commands as C
 from .settings import MotionSettings
 

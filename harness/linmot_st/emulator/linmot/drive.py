@@ -14,20 +14,22 @@ import struct
 import threading
 from dataclasses import dataclass, field
 
-from . import codes
-from .codes import SdoAbort
+from .. import codes
+from ..codes import SdoAbort
 from .command_table import CommandTable
-from .comm import CommObjects
+from ..cia301.objects import CommObjects
+from ..cia301.pdo import ProcessData
 from .curves import CurveStore
 from .errorlog import ErrorLog
-from .manufacturer import ManufacturerObjects, Reply
-from .motion import MotionControl, MotionSettings, ProcessData
-from .motion.words import ERROR, SETUP_ERROR
+from .manufacturer import ManufacturerObjects
+from ..cia301.sdo import Reply
+from ..motion import MotionControl, MotionSettings
+from ..motion.words import ERROR, SETUP_ERROR
 from .options import ProtocolOptions
 from .params import ParameterStore
 from .profile import DriveProfile, load_profile
-from .sdo import Pending, SdoServer
-from ..bus.frame import Frame
+from ..cia301.sdo import Pending, SdoServer
+from ...bus.frame import Frame
 
 MS = 1_000_000
 S = 1_000_000_000
@@ -240,7 +242,7 @@ class E1100Drive:
         the drive boots (boot-up message after `timings.boot_ns`) with its ROM, flash and error log kept.
         While attached, take `drive.lock` to inspect or change the drive from another thread.
         """
-        from ..bus import NodeServer
+        from ...bus import NodeServer
 
         if self._server is not None:
             raise RuntimeError("drive is already attached to a bus")
