@@ -116,10 +116,10 @@ class EmulatedDrives:
         return self._memory[node]
 
     def drive(self, node: int):
-        """An E1100Drive (the default profile, as `linmot-st emulate` serves it) holding the node's memory."""
-        from linmot_st.emulator import E1100Drive
+        """An E1100 drive (the default profile, as `linmot-st emulate` serves it) holding the node's memory."""
         from linmot_st.emulator.linmot.memory import load
-        drive = E1100Drive(node)
+        from linmot_st.emulator.models import make_drive
+        drive = make_drive("E1100", node)
         load(drive, self.memory(node))
         return drive
 

@@ -58,8 +58,8 @@ def _clean(text: str) -> str:
 def generate_eds(drive=None) -> str:
     """The EDS text for `drive` (default: the seeds' example drive)."""
     if drive is None:
-        from ..linmot.drive import E1100Drive
-        drive = E1100Drive(node_id=1)
+        from ..models import make_drive
+        drive = make_drive("E1100", 1)
     ident = drive.profile.identity
     lines: list[str] = []
 
