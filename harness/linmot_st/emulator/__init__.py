@@ -1,8 +1,10 @@
-"""The emulated LinMot E1100 CANopen drive (sans-I/O bus node), its parameter data and its EDS.
+"""The emulated LinMot CANopen drives (sans-I/O bus nodes), their parameter data and EDS.
 
-    from linmot_st.emulator import E1100Drive
-    drive = E1100Drive(node_id=1)
+    from linmot_st.emulator.models import make_drive
+    drive = make_drive("E1100", 1)          # E1100Drive(node_id=1) is the same drive
     drive.power_on(0)
+
+cia301/ holds the CiA 301 parts, linmot/ the LinMot device, motion/ the MC model; models.py the drive models.
 
 docs/emulator.md describes the behaviour and every choice made where the sources are silent.
 """

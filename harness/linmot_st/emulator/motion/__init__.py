@@ -1,5 +1,5 @@
 """The motion half of the emulated E1100: the MC software's state machine, motion command interpreter,
-setpoint generation, the axis that follows it, the drive's PDOs, and the trajectory record
+setpoint generation, the axis that follows it, and the trajectory record (the PDOs: emulator/cia301/pdo.py)
 (docs/emulator.md section 13).
 
     from linmot_st.emulator import E1100Drive
