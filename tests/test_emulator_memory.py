@@ -1,4 +1,4 @@
-"""The drive's memory as JSON (emulator/memory.py, `linmot-st emulate --dump-memory`), and the receive filters
+"""The drive's memory as JSON (emulator/linmot/memory.py, `linmot-st emulate --dump-memory`), and the receive filters
 a served drive gives its bus (`E1100Drive.rx_filter`, NodeServer)."""
 
 from __future__ import annotations

@@ -105,7 +105,7 @@ class EmulatedDrives:
             self.returncodes[n] = _stop(proc, signal.SIGTERM)
 
     def memory(self, node: int) -> dict:
-        """The node's memory as its process wrote it when stopped (emulator/memory.py)."""
+        """The node's memory as its process wrote it when stopped (emulator/linmot/memory.py)."""
         if node not in self._memory:
             from linmot_st.emulator.linmot.memory import read
             path = self.work / f"drive{node}.json"

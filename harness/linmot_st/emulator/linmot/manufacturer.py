@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from typing import Callable, Iterable, Mapping
 
 from .. import codes
-from ..cia301.objects import INTEGER32, UNSIGNED8, UNSIGNED32
+from ..cia301.objects import INTEGER32, UNSIGNED32
 from ..cia301.sdo import Reply
 from ..codes import NoMoreData, NotStarted, SdoAbort
 from .paramtypes import stringlets_of
