@@ -100,3 +100,13 @@ def test_a_model_in_the_table_is_built_by_name(model, monkeypatch):
 def test_emulate_refuses_an_unknown_model(capsys):
     assert main(["emulate", "--interface", "virtual", "--channel", "x", "--drive", "B9"]) == 2
     assert "--drive B9: no drive model 'B9' (known: E1100)" in capsys.readouterr().err
+
+
+def test_a_quirk_changes_each_drive_of_its_model_only():
+    from linmot_st.emulator.linmot.model import FifoTransmit
+
+    fifo = DriveModel("FIFO", E1100.profile, E1100.services, (FifoTransmit(),))
+    bus = SimBus(500_000)
+    bus.attach(make_drive(fifo, 1), "fifo")
+    bus.attach(make_drive("E1100", 2), "e1100")
+    assert [bus._part(n).by_priority for n in ("fifo", "e1100")] == [False, True]
