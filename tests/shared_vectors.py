@@ -17,7 +17,7 @@ def load(name: str) -> dict:
 
 def seed_curve(curve_id: int = 23):
     """The seeds' example curve (Figure 14) as the emulator stores it: 70-byte info block, data block."""
-    from linmot_st.emulator.curves import Curve
+    from linmot_st.emulator.linmot.curves import Curve
 
     c = next(c for c in load("curve_info.json")["curves"] if c["fields"]["curve_id"] == curve_id)
     return Curve(curve_id, bytes.fromhex(c["info_block"]), b"".join(int(w, 16).to_bytes(4, "little") for w in c["data_words"]))

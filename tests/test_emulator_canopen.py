@@ -13,7 +13,7 @@ import canopen
 import pytest
 
 from linmot_st.emulator import DriveTimings, E1100Drive, load_profile
-from linmot_st.emulator.eds import SHIPPED_EDS, generate_eds
+from linmot_st.emulator.cia301.eds import SHIPPED_EDS, generate_eds
 
 FAST = DriveTimings.fast()
 OD = canopen.import_od(str(SHIPPED_EDS), node_id=1)      # loaded once: the EDS has a record per UPID
@@ -176,7 +176,7 @@ def test_reset_over_the_bus_and_boot_up(served):
 def test_shipped_eds_is_current_and_loads():
     text = generate_eds()
     assert SHIPPED_EDS.read_text(encoding="ascii").replace("\r\n", "\n") == text, \
-        "regenerate: python -m linmot_st.emulator.eds"
+        "regenerate: python -m linmot_st.emulator.cia301.eds"
     od = canopen.import_od(str(SHIPPED_EDS), node_id=1)
     drive = E1100Drive(1)
     assert od.device_information.vendor_number == 0x156

@@ -1,5 +1,5 @@
-"""The drive's memory as JSON (emulator/memory.py, `linmot-st emulate --dump-memory`), and the receive filters
-a served drive gives its bus (`E1100Drive.receive_ids`, NodeServer)."""
+"""The drive's memory as JSON (emulator/linmot/memory.py, `linmot-st emulate --dump-memory`), and the receive filters
+a served drive gives its bus (`E1100Drive.rx_filter`, NodeServer)."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ from linmot_st.cli import main
 from linmot_st.commission.testing import commission
 from linmot_st.commission.verify import drive_state
 from linmot_st.emulator import OPERATIONAL, DriveTimings, E1100Drive
-from linmot_st.emulator.memory import FORMAT, dump, load, read, write
+from linmot_st.emulator.linmot.memory import FORMAT, dump, load, read, write
 from linmot_st.emulator.testing import DirectLink
 
 
@@ -61,7 +61,7 @@ def _state(drive) -> tuple:
     return (drive.nmt_state, drive.mc.control_word, drive.mc.state, json.dumps(dump(drive), sort_keys=True))
 
 
-def test_the_drive_reacts_to_no_frame_outside_its_receive_ids():
+def test_the_drive_reacts_to_no_frame_outside_its_rx_filter():
     # the filters a served drive gives its bus must never hide a frame it would act on: every standard
     # identifier, in Operational, with data that would mean something (NMT start, an SDO read, a control word)
     link = DirectLink(E1100Drive(1, timings=DriveTimings.fast()))
@@ -69,7 +69,7 @@ def test_the_drive_reacts_to_no_frame_outside_its_receive_ids():
     link.advance(10_000_000)
     drive = link.node
     assert drive.nmt_state == OPERATIONAL
-    ids = set(drive.receive_ids())
+    ids = set(drive.rx_filter)
     assert ids == {0x000, 0x080, 0x201, 0x301, 0x401, 0x601}
     before = _state(drive)
     for can_id in range(0x800):
@@ -80,14 +80,17 @@ def test_the_drive_reacts_to_no_frame_outside_its_receive_ids():
     assert _state(drive) == before
 
 
-def test_receive_ids_follow_the_rxpdo_cob_ids():
+def test_rx_filter_follows_the_rxpdo_cob_ids():
     link = DirectLink(E1100Drive(1, timings=DriveTimings.fast()))
     assert link.sdo("23 00 14 01 A1 02 00 00") == bytes.fromhex("60 00 14 01 00 00 00 00")    # RxPDO1 on 2A1h
     assert link.sdo("23 01 14 01 01 03 00 80") == bytes.fromhex("60 01 14 01 00 00 00 00")    # RxPDO2 invalid
-    assert set(link.node.receive_ids()) == {0x000, 0x080, 0x2A1, 0x401, 0x601}
+    assert set(link.node.rx_filter) == {0x000, 0x601}          # Pre-Operational: NMT and its SDO requests
+    link.send(Frame(0x000, bytes([0x01, 0x01])))
+    link.advance(1_000_000)
+    assert set(link.node.rx_filter) == {0x000, 0x080, 0x2A1, 0x401, 0x601}
 
 
-def test_node_server_gives_the_bus_the_nodes_receive_ids():
+def test_node_server_gives_the_bus_the_nodes_rx_filter():
     channel = f"filters-{uuid.uuid4().hex[:8]}"
     drive = E1100Drive(1, timings=DriveTimings.fast())
     with open_bus(f"virtual:{channel}") as served, open_bus(f"virtual:{channel}") as client:

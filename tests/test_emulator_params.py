@@ -7,9 +7,9 @@ import pytest
 from hypothesis import given, strategies as st
 
 from linmot_st.emulator import E1100Drive, ProfileError, load_profile
-from linmot_st.emulator.paramtypes import TYPES, stringlets_of, text_of
-from linmot_st.emulator.params import NoValueAccess, NotWritable, OutOfRange, ParameterStore, UnknownUpid
-from linmot_st.emulator.profile import (AU_LIVE, AU_RAM_READ, AU_RAM_WRITE, AU_ROM_READ, AU_ROM_WRITE,
+from linmot_st.emulator.linmot.paramtypes import TYPES, stringlets_of, text_of
+from linmot_st.emulator.linmot.params import NoValueAccess, NotWritable, OutOfRange, ParameterStore, UnknownUpid
+from linmot_st.emulator.linmot.profile import (AU_LIVE, AU_RAM_READ, AU_RAM_WRITE, AU_ROM_READ, AU_ROM_WRITE,
                                         load_parameters)
 
 PROFILE = load_profile()
@@ -171,7 +171,7 @@ def test_parameter_file_errors_name_the_line(tmp_path, row, message):
 
 
 def test_duplicate_upid_is_refused():
-    from linmot_st.emulator.profile import ParamDef
+    from linmot_st.emulator.linmot.profile import ParamDef
     dup = ParamDef(0x03E9, "clash", "par", TYPES["UINT16"], 0, 0, 1, False, "rw", 1)  # a stringlet of 03E8h
     with pytest.raises(ProfileError, match="defined twice"):
         PROFILE.with_parameters([dup]).all_definitions()

@@ -76,9 +76,9 @@ def coverage(exchanges) -> tuple[set[int], set[int], set[int]]:
 
 def emulator_codes() -> tuple[set[int], set[int], set[int]]:
     from linmot_st.emulator import codes
-    from linmot_st.emulator.manufacturer import SERVICES
+    from linmot_st.emulator.linmot.manufacturer import E1100_SERVICES
 
-    return set(SERVICES), set(codes.RESULT_NAMES), set(codes.ABORT_NAMES)
+    return {s.sub for s in E1100_SERVICES}, set(codes.RESULT_NAMES), set(codes.ABORT_NAMES)
 
 
 def test_every_vector_names_a_known_drive_setup():

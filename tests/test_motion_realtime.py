@@ -12,7 +12,7 @@ import canopen
 import pytest
 
 from linmot_st.emulator import DriveTimings, E1100Drive, load_profile
-from linmot_st.emulator.eds import SHIPPED_EDS
+from linmot_st.emulator.cia301.eds import SHIPPED_EDS
 
 OD = canopen.import_od(str(SHIPPED_EDS), node_id=1)
 

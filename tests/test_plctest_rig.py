@@ -40,6 +40,16 @@ def test_conditions_in_iec_text(station):
     assert 20 <= k <= 23 and rig.plc.scan_count == k          # fast timings: the boot-up message after 20 ms
 
 
+def test_the_rig_builds_its_drives_of_the_model_given(station):
+    from linmot_st.emulator.linmot.model import E1100, BootTime, DriveModel
+
+    quick = DriveModel("QUICK", E1100.profile, E1100.services, (BootTime(7_000_000),))
+    rig = Rig(station, timings="fast", model=quick)
+    assert rig.drive.model is quick
+    k = rig.step_until(f"{ST}.STATE = ST_COMMISSION", ms=100)
+    assert 7 <= k <= 10                                       # its boot-up message after 7 ms, not 20
+
+
 def test_a_condition_not_reached_says_what_where_and_when(station):
     rig = Rig(station, nodes=(1,))
     rig.watch(f"{ST}.ERRORID")

@@ -13,7 +13,7 @@ import canopen
 import pytest
 from shared_vectors import load
 
-from linmot_st.emulator.eds import SHIPPED_EDS
+from linmot_st.emulator.cia301.eds import SHIPPED_EDS
 from linmot_st.vcan.testing import Candump, EmulatedDrives, can_utility
 
 pytestmark = pytest.mark.socketcan

@@ -6,9 +6,9 @@ the wall clock (monotonic), in ns since the server started, so a node written fo
 unchanged. Every call into the node happens on the server thread while holding `server.lock`; other
 threads that inspect or change the node take the same lock (or use `server.call`).
 
-A node that has a `receive_ids()` method (the COB-IDs it reacts to) gets them as the bus's receive filters,
-kept up to date as they change: on SocketCAN the kernel then wakes the server only for those frames, so a
-node's answers are not queued behind the rest of a busy bus.
+A node with an `rx_filter` (bus/node.py: the CAN-IDs it reacts to, the same attribute the simulated bus reads)
+gets it as the bus's receive filters, kept up to date as it changes: on SocketCAN the kernel then wakes the
+server only for those frames, so a node's answers are not queued behind the rest of a busy bus.
 """
 
 from __future__ import annotations
@@ -21,11 +21,13 @@ import time
 from typing import Any, Callable, Iterable
 
 from .frame import Frame
+from .node import check_node, is_filtered
 
 log = logging.getLogger(__name__)
 
 # Longest a recv() blocks, so that stop() and newly due frames are served promptly.
 _POLL_S = 0.02
+_UNSET = object()       # no filter given to the bus yet (None is a filter: every frame)
 
 
 class NodeServer:
@@ -37,9 +39,7 @@ class NodeServer:
 
     def __init__(self, node: Any, bus: Any, *, on_start: Callable[[int], Any] | None = None,
                  name: str | None = None) -> None:
-        for method in ("on_frame", "on_timer", "next_timer_ns"):
-            if not callable(getattr(node, method, None)):
-                raise TypeError(f"{type(node).__name__} is not a bus node: it has no {method}() method")
+        check_node(node)
         self.node = node
         self.bus = bus
         self.name = name or type(node).__name__
@@ -54,8 +54,8 @@ class NodeServer:
         self.frames_received = 0
         self.frames_sent = 0
         self.send_errors = 0
-        self._receive_ids = getattr(node, "receive_ids", None)
-        self._filtered: tuple[int, ...] | None = None
+        self._has_filter = is_filtered(node)
+        self._filtered: object = _UNSET
 
     # -- life cycle -------------------------------------------------------------------------
     def start(self) -> "NodeServer":
@@ -115,11 +115,12 @@ class NodeServer:
             self.error = exc
 
     def _filter(self) -> None:
-        """Give the bus the node's receive_ids() when they changed (called under the lock)."""
-        ids = tuple(self._receive_ids())
-        if ids != self._filtered:
-            self._filtered = ids
-            self.bus.set_filters([{"can_id": i, "can_mask": 0x7FF, "extended": False} for i in ids])
+        """Give the bus the node's rx_filter when it changed (called under the lock); None: every frame."""
+        accepts = self.node.rx_filter
+        if accepts != self._filtered:
+            self._filtered = accepts
+            self.bus.set_filters(None if accepts is None else
+                                 [{"can_id": i, "can_mask": 0x7FF, "extended": False} for i in sorted(accepts)])
 
     def _run(self) -> None:
         node, bus, out = self.node, self.bus, self._out
@@ -133,7 +134,7 @@ class NodeServer:
             now = self.now_ns()
             try:
                 with self.lock:
-                    if self._receive_ids is not None:
+                    if self._has_filter:
                         self._filter()
                     due = node.next_timer_ns()
                     if due is not None and due <= now:

@@ -4,8 +4,8 @@ Participants are sans-I/O nodes (docs/architecture.md section 3) and endpoints (
 transmit queue served in order of ready time (FIFO among equal times), like a CAN controller with one
 transmit buffer fed by a driver queue. Only the head of each queue competes for the bus. A node with
 `tx_by_priority` has one buffer per CAN-ID instead (its ready frame of lowest CAN-ID competes; a frame of a
-CAN-ID whose earlier frame is still unsent when it becomes ready replaces it). A node with `rx_filter` (a set of CAN-IDs) is offered
-only those frames, as by a CAN controller's acceptance filter.
+CAN-ID whose earlier frame is still unsent when it becomes ready replaces it). A node with `rx_filter` (bus/node.py: a set of CAN-IDs) is
+offered only those frames, as by a CAN controller's acceptance filter.
 
 Timing. A frame started at s ends at e = s + frame_length_bits * bit time (SOF..EOF, stuff bits
 included); receivers get it at e, the bus is free again at e + 3 bit times (interframe space).
@@ -30,6 +30,7 @@ from typing import Any, Callable, Iterable, NamedTuple
 from .bits import ERROR_FRAME_BITS, IFS_BITS, frame_length_bits
 from .faults import STAGE, Fault, Predicate
 from .frame import Frame
+from .node import check_node, is_filtered
 
 STANDARD_BITRATES = (125_000, 250_000, 500_000, 1_000_000)
 _new_tuple = tuple.__new__
@@ -69,7 +70,7 @@ class _Part:
         self.overwritten = 0     # frames overwritten in their buffer by a later one of their CAN-ID (by_priority)
         # a node's acceptance filter (`rx_filter`: the CAN-IDs its on_frame reacts to, None: every frame), as
         # a CAN controller's: the bus offers it no other frame. Read again after each event the node handled.
-        self.filtered = hasattr(node, "rx_filter")
+        self.filtered = is_filtered(node)
         self.accepts = getattr(node, "rx_filter", None)
 
 
@@ -128,9 +129,7 @@ class SimBus:
     # -- participants -----------------------------------------------------------------------
     def attach(self, node: Any, name: str | None = None, latency_ns: int = 0) -> str:
         """Attach a sans-I/O node; its frames get ``latency_ns`` added to their ready times."""
-        for method in ("on_frame", "on_timer", "next_timer_ns"):
-            if not callable(getattr(node, method, None)):
-                raise TypeError(f"{type(node).__name__} is not a bus node: it has no {method}() method")
+        check_node(node)
         if latency_ns < 0:
             raise ValueError(f"latency_ns must be >= 0, got {latency_ns}")
         name = name or getattr(node, "name", None) or f"node{self._order + 1}"

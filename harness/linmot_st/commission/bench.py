@@ -188,9 +188,10 @@ def run() -> list[dict]:
 def recommission_figures() -> list[dict]:
     """Re-commissioning (the command's default): the same drive commissioned, then again; against the full
     write's read-back alone (its VERIFY phase), command defaults (realistic timings, flash, reset, verify)."""
-    from linmot_st.emulator import DriveTimings, E1100Drive
+    from linmot_st.emulator import DriveTimings
+    from linmot_st.emulator.models import make_drive
 
-    drive = E1100Drive(1, timings=DriveTimings())
+    drive = make_drive("E1100", 1, timings=DriveTimings())
     same = dict(timings="real", reset=True, drive_factory=lambda n: drive)
     first, _ = _commission(1, force=False, **same)
     again, wall = _commission(1, force=False, **same)

@@ -315,11 +315,11 @@ def _memory_file(folder: str, node: int):
 
 def _remembering_drives(folder: str, opts):
     """A drive factory: each emulated drive with the memory a previous run left in `folder` (if any)."""
-    from linmot_st.emulator import memory
-    from .runner import make_drive
+    from linmot_st.emulator.linmot import memory
+    from .runner import emulated_drive
 
     def factory(node: int):
-        drive = make_drive(node, opts)
+        drive = emulated_drive(node, opts)
         path = _memory_file(folder, node)
         if path.exists():
             memory.load(drive, memory.read(path))
@@ -329,7 +329,7 @@ def _remembering_drives(folder: str, opts):
 
 def _keep_drives(folder: str, drives: dict) -> None:
     from pathlib import Path
-    from linmot_st.emulator import memory
+    from linmot_st.emulator.linmot import memory
 
     Path(folder).mkdir(exist_ok=True)
     for node, drive in drives.items():

@@ -338,13 +338,14 @@ def _baseline_ns(build) -> int:
     if key not in _baseline:
         from linmot_st.bus import SimBus
         from linmot_st.cosim import CoSim
-        from linmot_st.emulator import DriveTimings, E1100Drive
+        from linmot_st.emulator import DriveTimings
+        from linmot_st.emulator.models import make_drive
         from linmot_st.plc import Plc
 
         from .project import MAILBOX
         from .runner import RunOptions, _configure
         plc, bus = Plc(build), SimBus(500_000)
-        drive = E1100Drive(NODE, timings=DriveTimings.fast())
+        drive = make_drive("E1100", NODE, timings=DriveTimings.fast())
         bus.attach(drive, "drive1")
         drive.power_on(0)
         sim = CoSim(plc, bus, mailbox=MAILBOX)
@@ -359,7 +360,8 @@ def _baseline_ns(build) -> int:
 def run_cell(family: str, phase: str, build=None) -> Cell:
     from linmot_st.bus import SimBus
     from linmot_st.cosim import CoSim
-    from linmot_st.emulator import DriveTimings, E1100Drive
+    from linmot_st.emulator import DriveTimings
+    from linmot_st.emulator.models import make_drive
     from linmot_st.plc import Plc, PlcFault
 
     from .project import MAILBOX
@@ -373,7 +375,7 @@ def run_cell(family: str, phase: str, build=None) -> Cell:
     build = build or _project()
     plc = Plc(build)
     bus = SimBus(500_000)
-    drive = E1100Drive(NODE, timings=DriveTimings.fast())
+    drive = make_drive("E1100", NODE, timings=DriveTimings.fast())
     bus.attach(drive, "drive1")
     drive.power_on(0)
     before = drive_state(drive)

@@ -66,6 +66,7 @@ class RunOptions:
     latency_ns: int = 0                        # extra latency of the drives' frames on the simulated bus
     timeout_s: float | None = None             # virtual (sim) or wall seconds; default from the dataset
     emulate: bool = True                       # False: real drives on the bus (python-can buses only)
+    drive_model: str = "E1100"                 # the emulated drives' model (emulator/models.py)
     fast_idle: bool = True                     # sim: idle scans run in C (linmot_st.cosim); False: every scan
                                                # from Python (the same frames at the same times, slower)
 
@@ -162,7 +163,7 @@ class RunResult:
     bit_ns: int
     axes: list[AxisResult]
     trace: list                                # SimBus TraceEntry or TraceRecord
-    drives: dict                               # node ID -> E1100Drive (emulated)
+    drives: dict                               # node ID -> emulated drive (emulator/models.py)
     scans: int = 0
     wall_s: float = 0.0
     timed_out: bool = False
@@ -346,10 +347,11 @@ def run_timeout_s(datasets, nodes: list[int], opts: RunOptions) -> float:
     return slowest + 4 * exchanges * 2 * max_bus_bits(8) / opts.bitrate
 
 
-def make_drive(node_id: int, opts: RunOptions):
-    from linmot_st.emulator import DriveTimings, E1100Drive
+def emulated_drive(node_id: int, opts: RunOptions):
+    from linmot_st.emulator import DriveTimings
+    from linmot_st.emulator.models import make_drive
     timings = DriveTimings.fast() if opts.timing_kind() == "fast" else DriveTimings()
-    return E1100Drive(node_id, timings=timings)
+    return make_drive(opts.drive_model, node_id, timings=timings)
 
 
 def run(pvl, opts: RunOptions, build_result, *, dataset=None, datasets=None, progress=None,
@@ -372,7 +374,7 @@ def run(pvl, opts: RunOptions, build_result, *, dataset=None, datasets=None, pro
         datasets = Datasets(Source(pvl, dataset or from_pvl(pvl), getattr(pvl, "filename", None) or "PVL"))
     timeout_s = opts.timeout_s or run_timeout_s(datasets, nodes, opts)
     plc = Plc(build_result)
-    factory = drive_factory or (lambda n: make_drive(n, opts))
+    factory = drive_factory or (lambda n: emulated_drive(n, opts))
     bases = datasets.bases(nodes)
     if opts.simulated:
         res = _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, timeout_s, after, bases)

@@ -19,8 +19,9 @@ import time
 
 from ..bus import Frame
 from ..bus.bench import RequestLoop, run_loop
-from .curves import Curve
-from .drive import E1100Drive
+from .linmot.curves import Curve
+from .linmot.drive import E1100Drive
+from .models import make_drive
 from .motion import bench as motion_bench
 
 S = 1_000_000_000
@@ -29,7 +30,7 @@ TARGET_EXCHANGES_PER_S = 50_000
 
 
 def _booted_drive() -> tuple[E1100Drive, int]:
-    drive = E1100Drive(1)
+    drive = make_drive("E1100", 1)
     drive.power_on(0)
     return drive, drive.timings.boot_ns + 10_000_000
 
@@ -45,7 +46,7 @@ def measure_bus_exchanges(total: int = 10_000) -> float:
 
 def measure_direct(total: int = 50_000) -> float:
     """One run: parameter reads per wall-clock second through on_frame alone (no bus)."""
-    drive = E1100Drive(1)
+    drive = make_drive("E1100", 1)
     drive.power_on(0)
     drive.on_timer(drive.next_timer_ns())
     frame = Frame(0x601, struct.pack("<BHBI", 0x40, 0x33A2, 1, 0))

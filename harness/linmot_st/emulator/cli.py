@@ -1,4 +1,5 @@
-"""`linmot-st emulate`: serve an emulated E1100 drive on a python-can bus in real time until interrupted."""
+"""`linmot-st emulate`: serve an emulated LinMot drive (the E1100 by default) on a python-can bus in real time until
+interrupted."""
 
 from __future__ import annotations
 
@@ -18,13 +19,16 @@ def register(subparsers) -> None:
     p.add_argument("--node-id", type=int_range(1, 127), default=1, help="CANopen node ID 1..127 (default 1)")
     p.add_argument("--bitrate", type=can_bitrate, default=500_000,
                    help="bit rate in bit/s (default 500000, the E1100 default; SocketCAN: set with `ip link`)")
-    p.add_argument("--profile", help="drive profile JSON (default: the seeds' example drive)")
+    p.add_argument("--drive", default="E1100", metavar="MODEL",
+                   help="the drive model (emulator/models.py; default E1100)")
+    p.add_argument("--profile", help="drive profile JSON (default: the model's own, for the E1100 the seeds' "
+                                     "example drive)")
     p.add_argument("--fast", action="store_true", help="short boot/MC/flash durations (for demos and tests)")
     p.add_argument("--duration", type=non_negative_seconds,
                    help="stop after this many seconds (default: until interrupted)")
     p.add_argument("--dump-memory", metavar="FILE",
                    help="when stopped, write the drive's memory (parameters ROM and RAM, curves and command table "
-                        "in RAM and flash) to FILE as JSON (emulator/memory.py), to check what a PLC wrote")
+                        "in RAM and flash) to FILE as JSON (emulator/linmot/memory.py), to check what a PLC wrote")
     p.set_defaults(func=run)
 
 
@@ -44,10 +48,15 @@ def run(args: argparse.Namespace) -> int:
     import can
 
     from ..bus import open_bus, parse_bus_spec
-    from .drive import DriveTimings, E1100Drive
-    from .profile import ProfileError, load_profile
+    from .linmot.drive import DriveTimings
+    from .linmot.profile import ProfileError, load_profile
+    from .models import make_drive, model_named
 
     spec = f"{args.interface}:{args.channel}"
+    try:
+        model = model_named(args.drive)
+    except ValueError as exc:
+        return _error(f"--drive {args.drive}: {exc}", 2)
     try:
         parse_bus_spec(spec, where=f"--interface {args.interface} --channel {args.channel}")
         if args.dump_memory:
@@ -59,7 +68,7 @@ def run(args: argparse.Namespace) -> int:
         return _error(f"--profile {args.profile}: {exc.strerror or exc}", 2)
     except ValueError as exc:
         return _error(str(exc), 2)
-    drive = E1100Drive(args.node_id, profile, DriveTimings.fast() if args.fast else None)
+    drive = make_drive(model, args.node_id, profile=profile, timings=DriveTimings.fast() if args.fast else None)
     try:
         bus = open_bus(spec, bitrate=args.bitrate)
     except (can.CanError, OSError, ValueError, ImportError) as exc:
@@ -75,7 +84,7 @@ def run(args: argparse.Namespace) -> int:
             old_handler = signal.signal(signal.SIGTERM, lambda signum, frame: stop.set())
         drive.attach(bus)
         served = drive._server
-        print(f"E1100 node {args.node_id} on {args.interface}:{args.channel} "
+        print(f"{model.name} node {args.node_id} on {args.interface}:{args.channel} "
               f"(boot-up after {drive.timings.boot_ns / 1e9:g} s); Ctrl-C stops", flush=True)
         deadline = None if args.duration is None else time.monotonic() + args.duration
         while not stop.is_set() and (deadline is None or time.monotonic() < deadline):
@@ -89,7 +98,7 @@ def run(args: argparse.Namespace) -> int:
             rc = _error(str(exc), 1)
         bus.shutdown()
         if args.dump_memory:
-            from .memory import write
+            from .linmot.memory import write
             try:
                 write(drive, args.dump_memory)
             except OSError as exc:
@@ -98,5 +107,5 @@ def run(args: argparse.Namespace) -> int:
             signal.signal(signal.SIGTERM, old_handler)
     done = (f" after {time.monotonic() - t0:.1f} s: {served.frames_received} frames received, "
             f"{served.frames_sent} sent" if served is not None else "")
-    print(f"E1100 node {args.node_id} stopped in NMT state {drive.nmt_state}{done}", flush=True)
+    print(f"{model.name} node {args.node_id} stopped in NMT state {drive.nmt_state}{done}", flush=True)
     return rc

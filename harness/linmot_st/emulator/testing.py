@@ -1,7 +1,7 @@
 """A direct link to one sans-I/O node in virtual time, for tests and quick experiments: no bus in between,
 frames are delivered at their ready time and take no bus time.
 
-    link = DirectLink(E1100Drive(1))          # powers the drive on and waits for its boot-up message
+    link = DirectLink(make_drive("E1100", 1)) # powers the drive on and waits for its boot-up message
     link.sdo("40 00 10 00 00 00 00 00")       # -> the 8 response bytes, or None after the timeout
 """
 
@@ -149,7 +149,7 @@ class ServedDrive:
     """A drive attached (`drive.attach`) to a fresh python-can `virtual` channel, with a raw client on the
     same channel; a context manager that waits for the boot-up message and detaches at the end.
 
-        with ServedDrive(E1100Drive(1, timings=DriveTimings.fast())) as served:
+        with ServedDrive(make_drive("E1100", 1, timings=DriveTimings.fast())) as served:
             served.client.exchange("40 A2 33 01 00 00 00 00")
     """
 

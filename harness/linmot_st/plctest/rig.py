@@ -215,8 +215,9 @@ def frame_predicate(can_id: int | list[int] | tuple | set | None = None,
 
 
 class Rig:
-    """The PLC of `build` on a SimBus with emulated E1100 drives (node IDs `nodes`), stepped in virtual time.
+    """The PLC of `build` on a SimBus with emulated drives (node IDs `nodes`), stepped in virtual time.
 
+    model (the drives' model: a name of emulator/models.py's MODELS or a DriveModel; default the E1100),
     bitrate, timings ('real', 'fast' or DriveTimings), protocol (ProtocolOptions), profile (DriveProfile),
     latency_ns (added to the drives' frames), drive_factory(node_id) -> node (replaces all of those),
     power_on (switch the drives on at t = 0), mailbox (the PLC's T_CanMailbox; None or absent: no bus
@@ -227,10 +228,11 @@ class Rig:
     def __init__(self, build: Any, *, nodes: tuple[int, ...] | list[int] = (1,), bitrate: int = 500_000,
                  timings: Any = "real", protocol: Any = None, profile: Any = None, latency_ns: int = 0,
                  drive_factory: Callable[[int], Any] | None = None, power_on: bool = True,
-                 mailbox: str | None = MAILBOX, watch: list[str] | tuple = (), echo: bool | None = None):
+                 mailbox: str | None = MAILBOX, watch: list[str] | tuple = (), echo: bool | None = None,
+                 model: Any = "E1100"):
         from linmot_st.bus import SimBus
         from linmot_st.cosim import CoSim
-        from linmot_st.emulator import E1100Drive
+        from linmot_st.emulator.models import make_drive
         from linmot_st.plc import Plc
 
         self.build = build
@@ -238,8 +240,8 @@ class Rig:
         self.bus = SimBus(bitrate)
         self.drives: dict[int, Any] = {}
         for n in nodes:
-            drive = drive_factory(n) if drive_factory else E1100Drive(n, profile, timings=_timings(timings),
-                                                                       protocol=protocol)
+            drive = drive_factory(n) if drive_factory else make_drive(
+                model, n, profile=profile, timings=_timings(timings), protocol=protocol)
             self.bus.attach(drive, self.drive_name(n), latency_ns)
             if power_on:
                 drive.power_on(0)
@@ -445,14 +447,14 @@ class RealTimeRig(Rig):
     def __init__(self, build: Any, *, bus: str = "virtual", nodes: tuple[int, ...] | list[int] = (1,),
                  bitrate: int = 500_000, timings: Any = "fast", protocol: Any = None, profile: Any = None,
                  drive_factory: Callable[[int], Any] | None = None, emulate: bool = True,
-                 mailbox: str = MAILBOX, watch: list[str] | tuple = ()):
+                 mailbox: str = MAILBOX, watch: list[str] | tuple = (), model: Any = "E1100"):
         import os
         import uuid
 
         from linmot_st.bus import open_bus
         from linmot_st.commission.runner import _RecordingBus      # the PLC side's frame record
         from linmot_st.cosim import RealTimeCoSim
-        from linmot_st.emulator import E1100Drive
+        from linmot_st.emulator.models import make_drive
         from linmot_st.plc import Plc
 
         if bus == "virtual":                      # a channel of its own: parallel tests never share frames
@@ -470,8 +472,8 @@ class RealTimeRig(Rig):
                 for n in nodes:
                     drive_bus = open_bus(bus, bitrate=bitrate)
                     self._buses.append(drive_bus)
-                    drive = drive_factory(n) if drive_factory else E1100Drive(
-                        n, profile, timings=_timings(timings), protocol=protocol)
+                    drive = drive_factory(n) if drive_factory else make_drive(
+                        model, n, profile=profile, timings=_timings(timings), protocol=protocol)
                     drive.attach(drive_bus)
                     self.drives[n] = drive
         except BaseException:

@@ -105,9 +105,9 @@ class EmulatedDrives:
             self.returncodes[n] = _stop(proc, signal.SIGTERM)
 
     def memory(self, node: int) -> dict:
-        """The node's memory as its process wrote it when stopped (emulator/memory.py)."""
+        """The node's memory as its process wrote it when stopped (emulator/linmot/memory.py)."""
         if node not in self._memory:
-            from linmot_st.emulator.memory import read
+            from linmot_st.emulator.linmot.memory import read
             path = self.work / f"drive{node}.json"
             if not path.exists():
                 raise FileNotFoundError(f"node {node} left no memory dump (exit status "
@@ -116,10 +116,10 @@ class EmulatedDrives:
         return self._memory[node]
 
     def drive(self, node: int):
-        """An E1100Drive (the default profile, as `linmot-st emulate` serves it) holding the node's memory."""
-        from linmot_st.emulator import E1100Drive
-        from linmot_st.emulator.memory import load
-        drive = E1100Drive(node)
+        """An E1100 drive (the default profile, as `linmot-st emulate` serves it) holding the node's memory."""
+        from linmot_st.emulator.linmot.memory import load
+        from linmot_st.emulator.models import make_drive
+        drive = make_drive("E1100", node)
         load(drive, self.memory(node))
         return drive
 

@@ -1,5 +1,5 @@
 """The motion half of the emulated E1100: the MC software's state machine, motion command interpreter,
-setpoint generation, the axis that follows it, the drive's PDOs, and the trajectory record
+setpoint generation, the axis that follows it, and the trajectory record (the PDOs: emulator/cia301/pdo.py)
 (docs/emulator.md section 13).
 
     from linmot_st.emulator import E1100Drive
@@ -11,10 +11,9 @@ setpoint generation, the axis that follows it, the drive's PDOs, and the traject
 from .axis import Axis
 from .commands import COMMANDS, CommandDef, decode, encode
 from .control import MotionControl
-from .pdo import ProcessData
 from .settings import MotionSettings
 from .setpoints import CurvePlan, StopPlan, VaPlan
 from .trajectory import Sample, Trajectory
 
-__all__ = ["Axis", "COMMANDS", "CommandDef", "CurvePlan", "MotionControl", "MotionSettings", "ProcessData",
+__all__ = ["Axis", "COMMANDS", "CommandDef", "CurvePlan", "MotionControl", "MotionSettings",
            "Sample", "StopPlan", "Trajectory", "VaPlan", "decode", "encode"]

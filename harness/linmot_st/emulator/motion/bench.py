@@ -17,8 +17,9 @@ import struct
 import time
 
 from ...bus import Frame, SimBus
-from ..drive import DriveTimings, E1100Drive
-from ..profile import load_profile
+from ..linmot.drive import DriveTimings, E1100Drive
+from ..models import make_drive
+from ..linmot.profile import load_profile
 from . import commands as C
 from .settings import MotionSettings
 
@@ -80,7 +81,7 @@ def _setup(n_drives: int, motion: MotionSettings | None = None) -> tuple[SimBus,
     bus = SimBus(1_000_000)
     drives = []
     for n in range(1, n_drives + 1):
-        d = E1100Drive(n, profile, timings=DriveTimings.fast(), motion=motion)
+        d = make_drive("E1100", n, profile=profile, timings=DriveTimings.fast(), motion=motion)
         d.comm.objects[0x1801].subs[2].default = 1
         d.comm.reset()
         bus.attach(d, f"drive{n}")

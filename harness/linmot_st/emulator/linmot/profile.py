@@ -12,7 +12,7 @@ from pathlib import Path
 
 from .paramtypes import TYPES, ParamType, stringlets_of
 
-DATA_DIR = Path(__file__).with_name("data")
+DATA_DIR = Path(__file__).parent.parent / "data"      # the drive models' data files
 DEFAULT_PROFILE = DATA_DIR / "e1100_default.json"
 
 # address-usage bits of the UPID list (spec 3.7, INFERRED bit map)

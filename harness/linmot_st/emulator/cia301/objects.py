@@ -12,8 +12,8 @@ import struct
 from dataclasses import dataclass, field
 from typing import Callable
 
-from . import codes
-from .codes import SdoAbort
+from .. import codes
+from ..codes import SdoAbort
 
 # CiA 301 data types (canopen.objectdictionary.datatypes codes)
 BOOLEAN, INTEGER8, INTEGER16, INTEGER32, UNSIGNED8, UNSIGNED16, UNSIGNED32 = 1, 2, 3, 4, 5, 6, 7

@@ -1,6 +1,6 @@
 """The EDS (CiA 306) of the emulated drive, generated from the drive's own object dictionary: the standard
-objects of comm.py and the manufacturer objects the SDO server answers (manufacturer.py), with one record per
-UPID. `python -m linmot_st.emulator.eds [OUT]` writes it (default: data/e1100_co.eds, shipped).
+objects of objects.py and the manufacturer objects the SDO server answers (linmot/manufacturer.py), with one record per
+UPID. `python -m linmot_st.emulator.cia301.eds [OUT]` writes it (default: data/e1100_co.eds, shipped).
 
 The output is deterministic (no generation date) so that the shipped file can be checked against the code.
 """
@@ -10,10 +10,10 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from . import comm as cm
-from .manufacturer import INTEGER32, UNSIGNED8
+from . import objects as cm
+from .objects import INTEGER32, UNSIGNED8
 
-SHIPPED_EDS = Path(__file__).with_name("data") / "e1100_co.eds"
+SHIPPED_EDS = Path(__file__).parent.parent / "data" / "e1100_co.eds"
 DATE = "01-01-2025"       # fixed: the file is regenerated only when the object dictionary changes
 
 
@@ -58,8 +58,8 @@ def _clean(text: str) -> str:
 def generate_eds(drive=None) -> str:
     """The EDS text for `drive` (default: the seeds' example drive)."""
     if drive is None:
-        from .drive import E1100Drive
-        drive = E1100Drive(node_id=1)
+        from ..models import make_drive
+        drive = make_drive("E1100", 1)
     ident = drive.profile.identity
     lines: list[str] = []
 
@@ -81,8 +81,8 @@ def generate_eds(drive=None) -> str:
     section("FileInfo", [
         ("FileName", SHIPPED_EDS.name), ("FileVersion", 1), ("FileRevision", 0), ("EDSVersion", "4.0"),
         ("Description", "LinMot E1100 with CANopen firmware, as emulated by linmot-st (docs/emulator.md)"),
-        ("CreationTime", "12:00AM"), ("CreationDate", DATE), ("CreatedBy", "linmot_st.emulator.eds"),
-        ("ModificationTime", "12:00AM"), ("ModificationDate", DATE), ("ModifiedBy", "linmot_st.emulator.eds"),
+        ("CreationTime", "12:00AM"), ("CreationDate", DATE), ("CreatedBy", "linmot_st.emulator.cia301.eds"),
+        ("ModificationTime", "12:00AM"), ("ModificationDate", DATE), ("ModifiedBy", "linmot_st.emulator.cia301.eds"),
     ])
     section("DeviceInfo", [
         ("VendorName", "NTI AG / LinMot"), ("VendorNumber", f"0x{ident.vendor_id:08X}"),

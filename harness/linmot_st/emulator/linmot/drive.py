@@ -14,27 +14,27 @@ import struct
 import threading
 from dataclasses import dataclass, field
 
-from . import codes
-from .codes import SdoAbort
+from .. import codes
+from ..codes import SdoAbort
 from .command_table import CommandTable
-from .comm import CommObjects
+from ..cia301.nmt import BOOTING, OFF, OPERATIONAL, PRE_OPERATIONAL, STOPPED, NmtSlave
+from ..cia301.objects import CommObjects
+from ..cia301.pdo import ProcessData
 from .curves import CurveStore
 from .errorlog import ErrorLog
-from .manufacturer import ManufacturerObjects, Reply
-from .motion import MotionControl, MotionSettings, ProcessData
-from .motion.words import ERROR, SETUP_ERROR
+from .manufacturer import ManufacturerObjects
+from ..cia301.sdo import Reply
+from ..motion import MotionControl, MotionSettings
+from ..motion.words import ERROR, SETUP_ERROR
 from .options import ProtocolOptions
 from .params import ParameterStore
-from .profile import DriveProfile, load_profile
-from .sdo import Pending, SdoServer
-from ..bus.frame import Frame
+from .model import E1100, DriveModel
+from .profile import DriveProfile
+from ..cia301.sdo import Pending, SdoServer
+from ...bus.frame import Frame
 
 MS = 1_000_000
 S = 1_000_000_000
-
-# NMT states (heartbeat state byte in brackets)
-OFF, BOOTING, PRE_OPERATIONAL, OPERATIONAL, STOPPED = "OFF", "BOOTING", "PRE-OPERATIONAL", "OPERATIONAL", "STOPPED"
-_HEARTBEAT_STATE = {PRE_OPERATIONAL: 0x7F, OPERATIONAL: 0x05, STOPPED: 0x04}
 
 MOTOR_TYPE_UPID = 0x1194
 PRODUCE_HEARTBEAT_UPID, PRODUCER_TIME_UPID = 0x2020, 0x2021
@@ -73,9 +73,11 @@ class _Event:
     fn: object = field(compare=False)
 
 
-class E1100Drive:
-    """The emulated drive. `E1100Drive(node_id=1)` is the seeds' example drive (data/e1100_default.json).
+class E1100Drive(NmtSlave):
+    """The emulated LinMot drive. `E1100Drive(node_id=1)` is the seeds' example drive (the E1100 model,
+    data/e1100_default.json); build drives of any model with emulator/models.py's make_drive(model, node_id).
 
+    model          DriveModel (linmot/model.py): profile data, manufacturer services, quirks (default: E1100)
     profile        another parameter set / tree versions / identity (profile.py: load_profile().with_tree(...))
     timings        DriveTimings
     protocol       ProtocolOptions: the alternatives where the sources leave the frame layout open (the
@@ -92,11 +94,13 @@ class E1100Drive:
 
     def __init__(self, node_id: int = 1, profile: DriveProfile | None = None, timings: DriveTimings | None = None,
                  *, protocol: ProtocolOptions | None = None, curve_capacity_bytes: int = 256 * 1024,
-                 error_log: ErrorLog | None = None, motion: MotionSettings | None = None):
+                 error_log: ErrorLog | None = None, motion: MotionSettings | None = None,
+                 model: DriveModel = E1100):
         if not 1 <= node_id <= 127:
             raise ValueError(f"CANopen node ID {node_id} is outside 1..127")
         self.node_id = node_id
-        self.profile = profile or load_profile()
+        self.model = model
+        self.profile = profile or model.load_profile()
         self.timings = timings or DriveTimings()
         self.protocol = protocol or ProtocolOptions()
         self.params = ParameterStore(self.profile.all_definitions())
@@ -113,13 +117,14 @@ class E1100Drive:
         self.mc_phase = "stopped"          # stopped | starting | running | stopping
         self.comm = CommObjects(node_id, self.profile.identity, self._heartbeat_power_on_ms,
                                 self._error_register, self._comm_changed)
-        self.mfr = ManufacturerObjects(self)
+        self.mfr = ManufacturerObjects(self, model.services)
         self.sdo = SdoServer(self.comm, self.mfr, lambda: self.nmt_state == PRE_OPERATIONAL)
         self.nmt_state = OFF
         self.now_ns = 0
         # the COB-IDs on_frame can react to now (NMT, its SDO requests, and while Operational SYNC and its
-        # RxPDOs): the simulated bus offers the drive no other frame, as a CAN controller's acceptance filter
-        # (SimBus reads it after each event the drive handled; kept current in _take)
+        # RxPDOs; bus/node.py): the simulated bus offers the drive no other frame and NodeServer makes it the
+        # python-can bus's receive filters, as a CAN controller's acceptance filter (both read it after each
+        # call into the drive; kept current in _take)
         self._rx_base = frozenset((0x000, 0x600 + node_id))
         self.rx_filter = self._rx_base
         self.lock = threading.RLock()      # held by the real-time server around each call (inspection may take it)
@@ -132,6 +137,8 @@ class E1100Drive:
         self._flash_busy: str | None = None
         self._out: list[tuple[int, object]] = []
         self._server = None
+        for quirk in model.quirks:        # last: a quirk sees (and may change) the drive as built
+            quirk.apply(self)
 
     # ------------------------------------------------------------------ node protocol
     def power_on(self, t_ns: int) -> None:
@@ -210,17 +217,6 @@ class E1100Drive:
             t = other
         return t
 
-    def receive_ids(self) -> list[int]:
-        """The COB-IDs on_frame reacts to: NMT (000h), its SDO requests (600h+ID), SYNC (1005h) and its valid
-        RxPDOs (1400h..1402h). NodeServer makes them the bus's receive filters (a CAN controller's
-        acceptance filter), so a served drive is woken only for its own frames."""
-        ids = {0x000, 0x600 + self.node_id, self.comm.value(0x1005) & 0x7FF}
-        for n in range(3):
-            cob = self.comm.value(0x1400 + n, 1)
-            if not cob & 0x80000000:
-                ids.add(cob & 0x7FF)
-        return sorted(ids)
-
     # ------------------------------------------------------------------ inspection
     @property
     def booted(self) -> bool:
@@ -250,11 +246,11 @@ class E1100Drive:
         the drive boots (boot-up message after `timings.boot_ns`) with its ROM, flash and error log kept.
         While attached, take `drive.lock` to inspect or change the drive from another thread.
         """
-        from ..bus import NodeServer
+        from ...bus import NodeServer
 
         if self._server is not None:
             raise RuntimeError("drive is already attached to a bus")
-        server = NodeServer(self, bus, on_start=self.power_on, name=f"E1100 node {self.node_id}")
+        server = NodeServer(self, bus, on_start=self.power_on, name=f"{self.model.name} node {self.node_id}")
         self.lock = server.lock
         self.mc.lookahead = False          # in real time every cycle runs when due: state is current to inspect
         self._server = server.start()
@@ -299,7 +295,7 @@ class E1100Drive:
     def _operating_ms(self, t_ns: int) -> int:
         return self.profile.identity.operating_hours * 3_600_000 + t_ns // MS
 
-    # ------------------------------------------------------------------ boot and NMT
+    # ------------------------------------------------------------------ boot (NMT, heartbeat: cia301/nmt.py)
     def _start_boot(self, t: int) -> None:
         """Power-on, software reset (0Bh) and NMT Reset Node: the whole firmware starts again."""
         self._drive_gen += 1
@@ -324,62 +320,12 @@ class E1100Drive:
         self._mc_start_now(t)
         self._enter_pre_operational(t)
 
-    def _enter_pre_operational(self, t: int) -> None:
-        self.nmt_state = PRE_OPERATIONAL
-        self.pdo.stop()
-        self._send(t, 0x700 + self.node_id, b"\x00")        # boot-up message
-        self._restart_heartbeat(t)
-
-    def _nmt_command(self, data: bytes, t: int) -> None:
-        if len(data) < 2 or data[1] not in (0, self.node_id):
-            return
-        cs = data[0]
-        if cs == 0x01:
-            if self.nmt_state != OPERATIONAL:
-                self.nmt_state = OPERATIONAL
-                self.pdo.start(t)
-        elif cs == 0x02:
-            self.nmt_state = STOPPED
-            self.pdo.stop()
-        elif cs == 0x80:
-            self.nmt_state = PRE_OPERATIONAL
-            self.pdo.stop()
-        elif cs == 0x81:
-            self._start_boot(t)
-        elif cs == 0x82:
-            self._comm_gen += 1
-            self._sdo_busy = False
-            self.nmt_state = BOOTING
-            self.pdo.stop()
-            self.sdo.reset()
-            self.comm.reset()
-            self._at(t + self.timings.reset_communication_ns, self._enter_pre_operational, comm=True)
-
     def _heartbeat_power_on_ms(self) -> int:
         """1017h at power-on: the interface parameters "Produce Heartbeat" / "Producer Time" (RAM)."""
         p = self.params
         if PRODUCE_HEARTBEAT_UPID in p and PRODUCER_TIME_UPID in p and p[PRODUCE_HEARTBEAT_UPID].ram:
             return p[PRODUCER_TIME_UPID].ram
         return 0
-
-    def _restart_heartbeat(self, t: int) -> None:
-        self._hb_gen += 1
-        period = self.comm.value(0x1017) * MS
-        if period:
-            gen = self._hb_gen
-            self._at(t + period, lambda te: self._heartbeat(te, gen, period), comm=True)
-
-    def _heartbeat(self, t: int, gen: int, period: int) -> None:
-        if gen != self._hb_gen:
-            return
-        state = _HEARTBEAT_STATE.get(self.nmt_state)
-        if state is not None:
-            self._send(t, 0x700 + self.node_id, bytes([state]))
-        self._at(t + period, lambda te: self._heartbeat(te, gen, period), comm=True)
-
-    def _comm_changed(self, index: int, sub: int) -> None:
-        if index == 0x1017:
-            self._restart_heartbeat(self.now_ns)
 
     def _error_register(self) -> int:
         return 0x01 if self.mc.running and self.mc.state in (SETUP_ERROR, ERROR) else 0x00

@@ -12,9 +12,8 @@ import struct
 from dataclasses import dataclass
 from typing import Callable
 
-from . import codes
-from .codes import SdoAbort
-from .manufacturer import BASE, LAST, Reply
+from .. import codes
+from ..codes import SdoAbort
 
 # command specifiers (byte 0, bits 7..5)
 CCS_DOWNLOAD_SEGMENT, CCS_DOWNLOAD, CCS_UPLOAD, CCS_UPLOAD_SEGMENT, CCS_ABORT = 0, 1, 2, 3, 4
@@ -31,6 +30,15 @@ def download_response(index: int, sub: int, result: int = 0) -> bytes:
 
 
 @dataclass
+class Reply:
+    """A manufacturer service's download answer that is not immediate: sent `delay_ns` after the request (plus
+    the turnaround), `then` runs when it is sent (the end of the operation)."""
+    code: int = codes.RC_OK
+    delay_ns: int = 0
+    then: Callable[[], None] | None = None
+
+
+@dataclass
 class Pending:
     """A response the drive sends `delay_ns` after the request's turnaround; `then` runs when it is sent."""
     response: bytes
@@ -41,7 +49,9 @@ class Pending:
 class SdoServer:
     def __init__(self, comm, manufacturer, nmt_pre_operational):
         self.comm = comm                    # CommObjects (1000h..1FFFh)
-        self.mfr = manufacturer             # ManufacturerObjects (2000h..5FFFh)
+        self.mfr = manufacturer             # the manufacturer area: .area (its indexes), .upload, .download,
+                                            # .service (linmot/manufacturer.py)
+        self._mfr_area = manufacturer.area
         self._pre_op = nmt_pre_operational  # callable -> bool
         self._seg = None                    # segmented transfer in progress: [kind, index, sub, buffer, toggle]
 
@@ -81,7 +91,7 @@ class SdoServer:
 
     # ---- upload ----
     def _upload(self, index: int, sub: int) -> bytes:
-        if BASE <= index <= LAST:
+        if index in self._mfr_area:
             payload = self.mfr.upload(index, sub)
             if len(payload) == 1:                       # sub 0 "number of entries", UNSIGNED8
                 return struct.pack("<BHB", 0x4F, index, sub) + payload + b"\0\0\0"
@@ -110,7 +120,7 @@ class SdoServer:
     # ---- download ----
     def _download(self, cs: int, index: int, sub: int, data: bytes):
         expedited, sized = cs & 0x02, cs & 0x01
-        if BASE <= index <= LAST:
+        if index in self._mfr_area:
             if not expedited:
                 # spec 1: every E1100 configuration service is expedited with 4 bytes
                 self.mfr.service(index, sub)            # unknown object/sub first

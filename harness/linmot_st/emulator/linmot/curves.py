@@ -13,8 +13,8 @@ from __future__ import annotations
 import struct
 from dataclasses import dataclass
 
-from . import codes
-from .codes import NoMoreData, NotStarted
+from .. import codes
+from ..codes import NoMoreData, NotStarted
 
 INFO_BLOCK_SIZE = 70
 CURVE_IDS = range(1, 101)

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import struct
 
-from . import codes
-from .codes import NoMoreData, NotStarted
+from .. import codes
+from ..codes import NoMoreData, NotStarted
 
 ENTRY_SIZE = 64
 ENTRIES = range(256)
