@@ -69,7 +69,7 @@ def test_one_axis(backend):
     drive = o.result.drives[1]
     assert sorted(drive.curves.flash) == sorted(drive.curves.ram) == [1, 2, 23]
     assert sorted(drive.ct.flash) == [1, 2, 3]
-    assert drive.string(0x03E8) == "LinMot-ST Demo" and drive.rom(0x1601) == -100000
+    assert drive.string(0x03E8) == "LinMot-ST Demo" and drive.rom(0x146E) == -100000
     text = o.report.text()
     assert "result: PASSED" in text and re.search(r"curves +532 +[0-9]+ ", text)
 

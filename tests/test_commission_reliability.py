@@ -178,8 +178,8 @@ def changed(upid, **fields):
 
 
 PREFLIGHT_REFUSALS = [
-    pytest.param(without(0x1390), 0x0604, 0x1390, id="no-such-upid"),
-    pytest.param(changed(0x1391, access="ro"), 0x0605, 0x1391, id="read-only"),
+    pytest.param(without(0x1472), 0x0604, 0x1472, id="no-such-upid"),
+    pytest.param(changed(0x1473, access="ro"), 0x0605, 0x1473, id="read-only"),
     pytest.param(changed(0x13A5, max=50), 0x0606, 0x13A5, id="above-max"),
     pytest.param(changed(0x1005, min=1600), 0x0607, 0x1005, id="below-min"),
 ]

@@ -135,8 +135,8 @@ def test_upid_list_walk_and_modified_list():
     assert s.next_entry(0x1000).upid == 0x1004
     assert s.next_entry(0, modified_only=True) is None
     s.write(0x03F3, 0x78412058, ram=False, rom=True)
-    s.write(0x1601, -100000 & 0xFFFFFFFF, ram=False, rom=True)
-    assert [s.next_entry(0, True).upid, s.next_entry(0x0400, True).upid] == [0x03F3, 0x1601]
+    s.write(0x146E, -100000 & 0xFFFFFFFF, ram=False, rom=True)
+    assert [s.next_entry(0, True).upid, s.next_entry(0x0400, True).upid] == [0x03F3, 0x146E]
 
 
 def test_with_tree_and_with_defaults_make_other_drives():

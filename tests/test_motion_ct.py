@@ -33,7 +33,7 @@ SEQUENCE = {
 
 
 def test_sequence_written_by_the_library_runs_with_its_waits():
-    profile = load_profile().with_defaults({0x1194: 2, 0x14A0: 250_000, 0x14A1: 500_000, 0x14A2: 500_000})
+    profile = load_profile().with_defaults({0x1194: 2, 0x14BE: 250_000, 0x14BF: 500_000, 0x14C0: 500_000})
     b = Bench(nodes=1, timings=DriveTimings.fast(), drive_kwargs={"profile": profile})
     for entry, (header, params, link) in SEQUENCE.items():
         r = b.fb("CTWR").run(ENTRY=entry, BLOCK=list(build_entry(header, params, link=link, name=f"step{entry}")))

@@ -27,7 +27,7 @@ def pvl_curves() -> dict[int, Curve]:
 
 def link_with_curves(defaults: dict | None = None) -> MotionLink:
     # RxPDO3 carries parameter bytes 6..11 (mapping 2041h = 2): 043xh..045xh need up to 12 bytes
-    values = {0x1194: 2, 0x1600: 280 * MM, 0x1601: -10 * MM, 0x2041: 2}
+    values = {0x1194: 2, 0x146F: 280 * MM, 0x146E: -10 * MM, 0x2041: 2}
     values.update(defaults or {})
     d = E1100Drive(1, load_profile().with_defaults(values), timings=DriveTimings.fast())
     d.curves.flash.update(pvl_curves())            # as a commissioned drive holds them after its reset

@@ -46,7 +46,7 @@ def _script(sync: bool) -> list[tuple[int, Frame]]:
 
 
 def _run(quiet: bool, sync: bool, hold_ns: int):
-    profile = load_profile().with_defaults({0x1194: 2, 0x1600: 250 * MM, 0x1601: -10 * MM})
+    profile = load_profile().with_defaults({0x1194: 2, 0x146F: 250 * MM, 0x146E: -10 * MM})
     drive = E1100Drive(1, profile, timings=DriveTimings.fast(),
                        motion=MotionSettings(quiet_cycles=quiet, in_target_hold_ns=hold_ns))
     generic = []                               # the cycles that ran through the generic path

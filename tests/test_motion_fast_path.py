@@ -67,8 +67,8 @@ CT_SEQUENCE = {   # as tests/test_motion_ct.py writes it with the library (here 
 
 
 def _link(quiet: bool, sync: bool, hold_ns: int) -> MotionLink:
-    values = {0x1194: 2, 0x1600: 280 * MM, 0x1601: -10 * MM, 0x2041: 2, 0x1530: 2_000_000,
-              0x14A0: 500_000, 0x14A1: 500_000, 0x14A2: 500_000}
+    values = {0x1194: 2, 0x146F: 280 * MM, 0x146E: -10 * MM, 0x2041: 2, 0x1530: 2_000_000,
+              0x14BE: 500_000, 0x14BF: 500_000, 0x14C0: 500_000}
     d = E1100Drive(1, load_profile().with_defaults(values), timings=DriveTimings.fast(),
                    motion=MotionSettings(quiet_cycles=quiet, in_target_hold_ns=hold_ns))
     d.curves.flash.update({c.curve_id: Curve(c.curve_id, c.info_block, c.data_block)

@@ -198,7 +198,7 @@ def test_a_move_that_needs_32_bit_values_goes_as_predefined_vai(b):
     heads = [struct.unpack_from("<H", f)[0] >> 4 for f in b.payloads(0x301, t0)]
     assert heads == [0x002, 0x002, 0x002, 0x020]                          # vmax, acc, dec, then 020xh
     d = b.drive
-    assert (d.params[0x14A0].ram, d.params[0x14A1].ram, d.params[0x14A2].ram) == (333300, 777700, 666600)
+    assert (d.params[0x14BE].ram, d.params[0x14BF].ram, d.params[0x14C0].ram) == (333300, 777700, 666600)
     assert d.mc.dem_p == 1234567                                          # 0.1 um exact
 
 
@@ -274,7 +274,7 @@ def test_reset_after_a_following_error_then_move_again(b):
 
 
 def test_position_limit_error_during_a_move():
-    b = MotionBench(nodes=1, defaults={0x1600: 200 * MM}).ready()
+    b = MotionBench(nodes=1, defaults={0x146F: 200 * MM}).ready()
     r = b.fb("MVA").run(POSITION=210.0, **MOVE)                             # beyond the 200 mm limit
     assert r.error and r.error_id == E["DriveError"] and r["DRIVEERROR"] == 0x0008
     assert b.drive.mc.state in (4, 14)

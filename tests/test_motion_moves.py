@@ -25,7 +25,7 @@ CYCLE = MS            # the default MC cycle
 def homed_link(defaults: dict | None = None, **motion) -> MotionLink:
     from linmot_st.emulator.motion import MotionSettings
 
-    values = {0x1194: 2, 0x1600: 280 * MM, 0x1601: -10 * MM}         # position limits inside the stroke
+    values = {0x1194: 2, 0x146F: 280 * MM, 0x146E: -10 * MM}         # position limits inside the stroke
     values.update(defaults or {})
     d = E1100Drive(1, load_profile().with_defaults(values), timings=DriveTimings.fast(),
                    motion=MotionSettings(**motion))
@@ -162,7 +162,7 @@ def test_quick_stop_bit_2_ramps_with_the_quick_stop_deceleration_then_switch_on_
 
 
 def test_predef_vai_uses_the_drive_parameters():
-    link = homed_link({0x14A0: 500_000, 0x14A1: 500_000, 0x14A2: 500_000})   # 0.5 m/s, 5 m/s^2
+    link = homed_link({0x14BE: 500_000, 0x14BF: 500_000, 0x14C0: 500_000})   # 0.5 m/s, 5 m/s^2
     t0 = link.t
     link.command(C.PREDEF_VAI_GO_TO_POS, target=100 * MM)
     link.advance(1000 * MS)
@@ -184,7 +184,7 @@ def test_write_live_parameter_and_interface_control_word_commands():
     assert d.params[0x1194].ram == 2 and d.mc.state == 8
     link.command(C.MASTER_HOMING, home_position=-5 * MM)
     link.advance(MS)
-    assert d.mc.axis.position == -5 * MM and d.params[0x1501].ram == -5 * MM
+    assert d.mc.axis.position == -5 * MM and d.params[0x13C7].ram == -5 * MM
 
 
 def error_case(command, fields, defaults=None, homed=True):
@@ -234,7 +234,7 @@ def test_following_error_during_a_move_then_reset_and_move_again():
 
 
 def test_standing_lag_error():
-    link = homed_link({0x1393: 5000})                                 # 0.5 mm standing error level
+    link = homed_link({0x1475: 5000})                                 # 0.5 mm standing error level
     d = link.drive
     d.mc.block(True, link.t)
     d.mc.push(8000, link.t)                                           # pushed 0.8 mm away and held there
@@ -244,7 +244,7 @@ def test_standing_lag_error():
 
 @pytest.mark.parametrize("target, code", [(2100, 0x0008), (-200, 0x0007)])
 def test_position_limits(target, code):
-    link = homed_link({0x1600: 200 * MM, 0x1601: -10 * MM}, stop_negative_pu=-1000 * MM)
+    link = homed_link({0x146F: 200 * MM, 0x146E: -10 * MM}, stop_negative_pu=-1000 * MM)
     d = link.drive
     link.command(C.VAI16_GO_TO_POS, target=target, vmax=500, acc=50, dec=50)
     assert link.wait(lambda: d.mc.state == 14, 3000 * MS)

@@ -19,7 +19,7 @@ MM = 10_000
 
 
 def drive(defaults: dict | None = None) -> E1100Drive:
-    values = {0x1194: 2, 0x1600: 280 * MM, 0x1601: -10 * MM}
+    values = {0x1194: 2, 0x146F: 280 * MM, 0x146E: -10 * MM}
     values.update(defaults or {})
     return E1100Drive(1, load_profile().with_defaults(values), timings=DriveTimings.fast())
 
@@ -258,7 +258,7 @@ def test_txpdo2_default_content_is_the_mc_variables(position, demand, accelerati
     mc.last_header = 0x0123
     mc.axis.physical, mc.axis.offset, mc.axis.acceleration = position - 3.0, 3.0, acceleration
     mc.dem_p = demand
-    d.params[0x14C0].ram = scale
+    d.params[0x14C8].ram = scale
     words = struct.unpack("<Hhhh", mc.txpdo2_payload())
     assert words == (0x0123, *expected)
     assert words[1:] == (mc.variable(0x1B95), mc.variable(0x1B93), mc.variable(0x1B94))

@@ -155,7 +155,7 @@ def test_homing_on_the_mechanical_stop_runs_search_and_initial_position():
     assert sv == 0x0901 and sw & SPECIAL and sw & MOTION and warn == NOT_HOMED     # searching
     assert link.wait(lambda: d.mc.state_var == 0x090F, 5_000 * MS)
     assert d.mc.homed and abs(d.mc.axis.position - 100_000) <= 1000   # at the initial position 1502h (10 mm)
-    # the stop is the home position 1501h = 0: the slider's own frame says where the stop is
+    # the stop is the home position 13C7h = 0: the slider's own frame says where the stop is
     assert d.mc.axis.physical - d.mc.axis.position == pytest.approx(d.motion.stop_negative_pu - 0, abs=1)
     step(link, 0x003F)
     assert d.mc.state == 8 and d.mc.homed

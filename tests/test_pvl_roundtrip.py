@@ -62,7 +62,7 @@ def test_latin1_bytes_round_trip(tmp_path):
     # LinMot-Talk is a Windows program: units such as 'µm' arrive as single bytes (B5h); a cp1252 ellipsis (85h)
     # inside a caption must not split the line
     obj = ParameterObject("MCTREE1100DSW4_HC_V3S0_b1", 2, 4612, 3, 0, "b1",
-                          (Parameter(0x1390, 0x0000C350, "Max Pos Following Error\x85", "5000 \u00b5m"),))
+                          (Parameter(0x1472, 0x0000C350, "Max Pos Following Error\x85", "5000 \u00b5m"),))
     model = PvlFile((obj,))
     save_pvl(model, tmp_path / "u.pvl")
     raw = (tmp_path / "u.pvl").read_bytes()

@@ -133,7 +133,7 @@ def test_two_axes_example():
     assert os_layer.identity == TreeIdentity(1, 1, 3, 0) and mc_layer.identity == TreeIdentity(2, 4612, 3, 0)
     assert os_layer.string(0x03E8) == "LinMot-ST Demo" and os_layer.string(0x03F2) == "X Axis Left"
     assert mc_layer.get(0x1194).value == 2 and pvl.layer(2) is mc_layer and pvl.layer(3) is None
-    assert mc_layer.get(0x1601).signed_value == -100_000
+    assert mc_layer.get(0x146E).signed_value == -100_000
     assert len(mc_layer.parameters) >= 12
     assert all(LAYERS[2].holds(p.upid) for p in mc_layer.parameters)
     assert pvl.curve(23) == demo.seed_curve()

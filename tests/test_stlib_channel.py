@@ -43,8 +43,8 @@ def test_fbs_of_one_drive_take_turns_without_wasted_scans():
     b = Bench(nodes=1)
     t0 = b.plc.time_ns
     b.fb("RD").start(UPID=LIVE)
-    b.fb("RD2").start(UPID=0x1010)
-    b.fb("WR").start(UPID=0x1011, VALUE=900, MEM="LM_RAM")
+    b.fb("RD2").start(UPID=0x1018)
+    b.fb("WR").start(UPID=0x1019, VALUE=900, MEM="LM_RAM")
     at = finish(b, "RD", "RD2", "WR")
     assert at == {"RD": 2, "RD2": 3, "WR": 4}          # 3 exchanges, back to back, one scan each
     trace = b.sdo_trace(since_ns=t0)
@@ -178,7 +178,7 @@ def test_holder_that_stops_being_called_is_evicted():
     b.fb("RD2").start(UPID=LIVE)
     b.step(1)                                   # RD2 holds the channel, its request is out
     b["CALLRD2"] = False                        # ... and is no longer called
-    r = b.fb("RD").run(UPID=0x1010)
+    r = b.fb("RD").run(UPID=0x1018)
     assert r.done and r["VALUE"] == 400
     assert r.scans <= 2 + 3 + 1                 # served after HolderScans (3) missed scans
     assert b["AX1.EVICTIONS"] == 1
@@ -307,7 +307,7 @@ def test_heartbeat_loss_makes_the_channel_not_ready():
 
 def test_sequencer_chains_services_without_wasted_scans():
     b = Bench(nodes=1)
-    upids = [0x1005, 0x1010, 0x1011, 0x1020, 0x0430]     # live parameters: RAM+ROM writes accepted
+    upids = [0x1005, 0x1018, 0x1019, 0x1040, 0x0430]     # live parameters: RAM+ROM writes accepted
     values = [1800, 300, 700, -100, 1]
     b["SEQUPIDS"] = upids + [0] * 11
     b["SEQVALUES"] = values + [0] * 11

@@ -107,7 +107,7 @@ def test_duplicated_answer_is_a_stray_not_a_reply():
     b = Bench(nodes=1)
     b.bus.duplicate(answer_to(0x01), count=1)
     assert b.fb("RD").run(UPID=0x1005)["VALUE"] == 2000
-    assert b.fb("RD2").run(UPID=0x1010)["VALUE"] == 400
+    assert b.fb("RD2").run(UPID=0x1018)["VALUE"] == 400
     assert b["AX1.STRAYS"] == 1
 
 

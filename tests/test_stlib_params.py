@@ -18,7 +18,7 @@ E = {name: e.value for name, e in BY_NAME.items()}
 ABORT_READ_ONLY, ABORT_RANGE, ABORT_NO_OBJECT, ABORT_UNSUPPORTED = 0x06010002, 0x06090030, 0x06020000, 0x06010000
 
 LIVE = 0x1005          # Max Current Limit: live UINT16 100..2500, default 2000
-NON_LIVE = 0x1012      # Motor Supply Voltage Error Low Level: non-live UINT16 0..1000, default 180
+NON_LIVE = 0x101A      # Motor Supply Voltage Error Low Level: non-live UINT16 0..1000, default 180
 READ_ONLY = 0x1B62     # State Var: a variable
 
 
@@ -49,7 +49,7 @@ def test_write_then_read_back_every_memory(b):
 
 
 def test_signed_values(b):
-    upid = 0x1020      # SINT16 -400..900
+    upid = 0x1040      # SINT16 -400..900
     assert b.fb("WR").run(UPID=upid, VALUE=-321, MEM="LM_RAM_ROM").done
     assert b.fb("RD").run(UPID=upid, MEM="LM_ROM")["VALUE"] == -321
     assert b.fb("RD").run(UPID=upid, MEM="LM_MIN")["VALUE"] == -400

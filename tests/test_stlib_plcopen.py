@@ -52,7 +52,7 @@ class Spec:
 
 
 SPECS = [
-    Spec("RD", dict(UPID=0x1005, MEM="LM_RAM"), dict(UPID=0x1010, MEM="LM_ROM"), dict(UPID=0x4000)),
+    Spec("RD", dict(UPID=0x1005, MEM="LM_RAM"), dict(UPID=0x1018, MEM="LM_ROM"), dict(UPID=0x4000)),
     Spec("WR", dict(UPID=0x1005, VALUE=1500, MEM="LM_RAM"), dict(VALUE=1600), dict(MEM="LM_MIN")),
     Spec("SRD", dict(UPID=0x03E8, COUNT=8, MEM="LM_RAM"), dict(COUNT=2), dict(COUNT=0)),
     Spec("SWR", dict(UPID=0x03F2, COUNT=8, TEXT="conformance", MEM="LM_RAM_ROM"), dict(TEXT="other"), dict(COUNT=40)),

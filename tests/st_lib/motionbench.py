@@ -19,7 +19,7 @@ MOTION_TESTBENCH = Path(__file__).resolve().parent / "motion_testbench.st"
 MM = 10_000
 
 # a drive with a motor and position limits inside its stroke (the factory profile has no motor: setup error)
-PROFILE_VALUES = {0x1194: 2, 0x1600: 280 * MM, 0x1601: -10 * MM}
+PROFILE_VALUES = {0x1194: 2, 0x146F: 280 * MM, 0x146E: -10 * MM}
 
 
 class MotionBench(Bench):

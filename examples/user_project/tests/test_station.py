@@ -21,7 +21,7 @@ def limit(upid: int) -> int:
     return raw - (1 << 32) if raw >= 1 << 31 else raw
 
 
-MAX_POSITION, MIN_POSITION = limit(0x1600), limit(0x1601)
+MAX_POSITION, MIN_POSITION = limit(0x146F), limit(0x146E)
 
 
 def test_the_dataset_is_generated_from_drive_pvl(linmot_project):
@@ -37,7 +37,7 @@ def test_the_station_commissions_its_axis_and_reads_its_limits(rig):
     assert rig[f"{STATION}.MAXPOSITION"] == MAX_POSITION
     assert rig[f"{STATION}.MINPOSITION"] == MIN_POSITION
     # what the PLC wrote is in the drive: a parameter, the curves and the command table, in flash
-    assert rig.drive.params[0x1600].rom == MAX_POSITION & 0xFFFFFFFF
+    assert rig.drive.params[0x146F].rom == MAX_POSITION & 0xFFFFFFFF
     assert sorted(rig.drive.curves.flash) == sorted(c.curve_id for c in PVL.curves)
     assert len(rig.drive.ct.flash) == len(PVL.command_table)
 

@@ -14,6 +14,7 @@ import struct
 from dataclasses import dataclass, field
 
 from linmot_st.emulator.motion import commands as C
+from linmot_st.protocol.upids import P_CURVE_AMPLITUDE, P_CURVE_OFFSET, P_CURVE_TIME_SCALE, P_SCALE_POS
 
 MM = 10_000                     # 0.1 um per mm
 MAX_STEPS = 24                  # T_PlcSteps
@@ -107,9 +108,9 @@ def plan(pvl, position_mm: float = 50.0) -> Plan:
     move = dict(velocity=MOVE_VELOCITY, acceleration=MOVE_ACCELERATION)
     steps.append(Step("move", f"move to {position_mm:g} mm", position_mm=position_mm, target_mm=position_mm,
                       **move))
-    offset = _param(pvl, 0x14D0, 0)
-    time_scale = _param(pvl, 0x14D1, 10000)
-    amplitude = _param(pvl, 0x14D2, 1000) / 1000.0
+    offset = _param(pvl, P_CURVE_OFFSET, 0)
+    time_scale = _param(pvl, P_CURVE_TIME_SCALE, 10000)
+    amplitude = _param(pvl, P_CURVE_AMPLITUDE, 1000) / 1000.0
     for c in pvl.curves:
         info = c.info
         if info.object_type != 0x0003:
@@ -123,7 +124,7 @@ def plan(pvl, position_mm: float = 50.0) -> Plan:
                           target_mm=start, **move))
         steps.append(Step("curve", f"run curve {c.curve_id} {info.name} (040xh)", curve_id=c.curve_id,
                           target_mm=end, curve=run))
-    scale_pos = _param(pvl, 0x14C0, 1000)
+    scale_pos = _param(pvl, P_SCALE_POS, 1000)
     for e in sorted(pvl.command_table, key=lambda e: e.entry_id):
         chain, target = _ct_chain(pvl, e.entry_id, scale_pos)
         if target is not None:

@@ -1,29 +1,33 @@
 """The UPIDs the emulated drive's Motion Control SW reads (parameters, RAM values) and publishes (variables).
 
-One table for the drive model and the harness; docs/emulator.md lists which UPIDs are sourced and which are
-INVENTED.
+One table for the drive model and the harness. docs/upids.md lists every UPID with its meaning and source:
+[MC] = LinMot "Motion Control SW" manual (SG5, E1100/E1200/E1400 UPIDs, its section numbers), [S004] = seed 004,
+[CO1100] = the CANopen manual; INVENTED where no source names one (then a number no source uses).
 """
 
-# parameters the MC reads (RAM values); docs/emulator.md lists which UPIDs are sourced and which invented
-P_LAG_ALWAYS_WARN, P_LAG_ALWAYS_ERROR = 0x1390, 0x1391
-P_LAG_STANDING_WARN, P_LAG_STANDING_ERROR = 0x1392, 0x1393
-P_PREDEF_VMAX, P_PREDEF_ACC, P_PREDEF_DEC = 0x14A0, 0x14A1, 0x14A2
-P_JOG_VELOCITY, P_JOG_INCREMENT = 0x14B0, 0x14B1
-P_SCALE_POS, P_SCALE_VEL, P_SCALE_ACC = 0x14C0, 0x14C1, 0x14C2
-P_CURVE_OFFSET, P_CURVE_TIME_SCALE, P_CURVE_AMPLITUDE = 0x14D0, 0x14D1, 0x14D2
-P_HOMING_MODE, P_HOME_POSITION, P_INITIAL_POSITION = 0x1500, 0x1501, 0x1502
-P_HOMING_VMAX, P_HOMING_ACC = 0x1503, 0x1504
-P_GO_TO_POSITION = 0x1510
-P_CLEARANCE_1, P_CLEARANCE_2 = 0x1520, 0x1521
-P_QUICK_STOP_DEC = 0x1530
-P_LIMIT_POSITIVE, P_LIMIT_NEGATIVE, P_LIMITS_ENABLE = 0x1600, 0x1601, 0x1602
-P_CW_COPY_MASK, P_CW_FORCE_MASK, P_CW_FORCE_VALUES = 0x1700, 0x1701, 0x1702
-P_RANGE1_UPID, P_RANGE1_MIN, P_RANGE1_MAX = 0x1710, 0x1711, 0x1712
-P_READY_TO_OPERATE_MODE = 0x1720
+# parameters the MC reads (RAM values)
+P_LAG_ALWAYS_WARN, P_LAG_ALWAYS_ERROR = 0x1472, 0x1473      # error 1473h: [MC] 10 (error 0Bh); warn INVENTED
+P_LAG_STANDING_WARN, P_LAG_STANDING_ERROR = 0x1474, 0x1475  # error 1475h: [MC] 10 (error 0Ch); warn INVENTED
+P_PREDEF_VMAX, P_PREDEF_ACC, P_PREDEF_DEC = 0x14BE, 0x14BF, 0x14C0   # [MC] 4.3.70
+P_JOG_VELOCITY, P_JOG_INCREMENT = 0x14B0, 0x14B1                     # INVENTED
+P_SCALE_POS, P_SCALE_VEL, P_SCALE_ACC = 0x14C8, 0x14C9, 0x14CA       # INVENTED (16-bit interface scaling)
+P_CURVE_OFFSET, P_CURVE_TIME_SCALE, P_CURVE_AMPLITUDE = 0x14D0, 0x14D1, 0x14D2   # INVENTED
+P_HOMING_MODE, P_INITIAL_POSITION = 0x1500, 0x1502                   # INVENTED
+P_HOME_POSITION = 0x13C7                                             # [MC] 4.3.7 (009xh writes it)
+P_HOMING_VMAX, P_HOMING_ACC = 0x1503, 0x1504                         # INVENTED
+P_GO_TO_POSITION = 0x1510                                            # INVENTED
+P_CLEARANCE_1, P_CLEARANCE_2 = 0x1520, 0x1521                        # INVENTED
+P_QUICK_STOP_DEC = 0x1530                                            # INVENTED
+P_LIMIT_POSITIVE, P_LIMIT_NEGATIVE = 0x146F, 0x146E                  # max / min position: [MC] 10 (errors 08h/07h)
+P_LIMITS_ENABLE = 0x1602                                             # INVENTED
+P_CW_COPY_MASK, P_CW_FORCE_MASK, P_CW_FORCE_VALUES = 0x1700, 0x1701, 0x1702   # INVENTED
+P_RANGE1_UPID, P_RANGE1_MIN, P_RANGE1_MAX = 0x1780, 0x1781, 0x1782   # INVENTED (1710h is [MC] 7.2.2's fall delay)
+P_READY_TO_OPERATE_MODE = 0x6300                                     # [S004] 3.7, [MC] 3.7
 
 # the variables the MC publishes (read by SDO as UPID RAM values, mapped into TxPDOs)
-V_STATE_VAR, V_ACTUAL_POSITION, V_DEMAND_CURRENT = 0x1B62, 0x1B8D, 0x1B93
-V_DEMAND_POSITION_16, V_ACTUAL_POSITION_16 = 0x1B94, 0x1B95
-V_STATUS_WORD, V_CONTROL_WORD, V_WARN_WORD, V_LOGGED_ERROR = 0x1D51, 0x1D52, 0x1D8E, 0x1D96
-V_DEMAND_POSITION, V_TARGET_POSITION, V_POSITION_DIFFERENCE = 0x1B8C, 0x1B90, 0x1B91
-V_DEMAND_VELOCITY, V_ACTUAL_VELOCITY = 0x1BAE, 0x1BAF
+V_STATE_VAR, V_ACTUAL_POSITION, V_DEMAND_CURRENT = 0x1B62, 0x1B8D, 0x1B93      # [CO1100] default PDOs
+V_DEMAND_POSITION_16, V_ACTUAL_POSITION_16 = 0x1B94, 0x1B95                    # [CO1100] default PDOs
+V_STATUS_WORD, V_CONTROL_WORD, V_WARN_WORD, V_LOGGED_ERROR = 0x1D51, 0x1D52, 0x1D8E, 0x1D96   # [CO1100]
+V_DEMAND_POSITION, V_TARGET_POSITION, V_POSITION_DIFFERENCE = 0x1B8C, 0x1B90, 0x1B91   # INVENTED
+V_DEMAND_VELOCITY = 0x1BAE                                                     # INVENTED
+V_ACTUAL_VELOCITY = 0x1BAF                                                     # public CANFuck PDO note

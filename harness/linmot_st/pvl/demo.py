@@ -6,9 +6,10 @@ checked against the files by the tests (`python -m linmot_st.pvl.demo examples/`
 - seed_curve.pvl: the seeds' Figure 14, unchanged;
 - two_axes.pvl: what `make demo` commissions onto each of two axes.
 
-The MC parameter UPIDs other than 1194h (Motor Type, from the seeds) are not from a LinMot source:
-they are the invented UPIDs of the emulated drive's parameter table (emulator/data/), which lie in the
-MC layer range 1000h..1EFFh.
+The MC parameter UPIDs are those of the emulated drive's parameter table (emulator/data/), in the MC layer
+range 1000h..1EFFh: 1194h (Motor Type) from the seeds; 146Eh/146Fh (min/max position), 1473h (max
+position lag) and 14BEh/14BFh (predefined VAI) from the Motion Control SW manual [MC]; the others INVENTED
+(docs/upids.md lists every UPID with its source).
 """
 
 from __future__ import annotations
@@ -38,21 +39,21 @@ MC_PARAMETERS = [
     (0x1005, 0x000005DC, r"Motion Control SW\Drive Configuration\Power Bridge\Max Current Limit", "1.5 A"),
     (0x1194, 0x00000002, r"Motion Control SW\Motor Configuration\Motor Type", "P01"),
     (0x11A0, 0x000004B0, r"Motion Control SW\Motor Configuration\Max Current", "1.2 A"),
-    (0x1390, 0x00004E20, r"Motion Control SW\Position Controller\Position Lag Always Warn Level", "2 mm"),
-    (0x1391, 0x0000C350, r"Motion Control SW\Position Controller\Position Lag Always Error Level", "5 mm"),
     (0x13A2, 0x0000000C, r"Motion Control SW\Position Controller\Control Parameter Set A\P Gain", "0.12 A/mm"),
     (0x13A3, 0x00000003, r"Motion Control SW\Position Controller\Control Parameter Set A\D Gain", "0.03 A/(m/s)"),
     (0x13A5, 0x00000064, r"Motion Control SW\Position Controller\Control Parameter Set A\FF Friction", "0.1 A"),
-    (0x14A0, 0x0016E360, r"Motion Control SW\Motion Interface\Predefined VA Interpolator\Maximal Velocity", "1.5 m/s"),
-    (0x14A1, 0x001E8480, r"Motion Control SW\Motion Interface\Predefined VA Interpolator\Acceleration", "20 m/s^2"),
+    (0x146E, 0xFFFE7960, r"Motion Control SW\Position Limits\Negative Limit", "-10 mm"),
+    (0x146F, 0x001E8480, r"Motion Control SW\Position Limits\Positive Limit", "200 mm"),
+    (0x1472, 0x00004E20, r"Motion Control SW\Position Controller\Position Lag Always Warn Level", "2 mm"),
+    (0x1473, 0x0000C350, r"Motion Control SW\Position Controller\Position Lag Always Error Level", "5 mm"),
+    (0x14BE, 0x0016E360, r"Motion Control SW\Motion Interface\Predefined VA Interpolator\Maximal Velocity", "1.5 m/s"),
+    (0x14BF, 0x001E8480, r"Motion Control SW\Motion Interface\Predefined VA Interpolator\Acceleration", "20 m/s^2"),
     (0x1500, 0x00000003, r"Motion Control SW\State Machine Setup\Homing\Mode", "Mech Stop Negative Search"),
     (0x1502, 0x0000C350, r"Motion Control SW\State Machine Setup\Homing\Initial Position", "5 mm"),
-    (0x1600, 0x001E8480, r"Motion Control SW\Position Limits\Positive Limit", "200 mm"),
-    (0x1601, 0xFFFE7960, r"Motion Control SW\Position Limits\Negative Limit", "-10 mm"),
 ]
 
-# seed_parameters.pvl: the seeds' Motor Type row, then the next five rows of MC_PARAMETERS
-SEED_MC_UPIDS = (0x1194, 0x11A0, 0x1390, 0x1391, 0x13A2, 0x13A3)
+# seed_parameters.pvl: the seeds' Motor Type row, then five more rows of MC_PARAMETERS
+SEED_MC_UPIDS = (0x1194, 0x11A0, 0x1472, 0x1473, 0x13A2, 0x13A3)
 
 SEED_CURVE_INFO_WORDS = (0x00030046, 0x0004000A, 0x6D617845, 0x5F656C70, 0x76727543, 0x00000065,
                          0x00000000, 0x00170000, 0x00004E20, 0x0005001A, 0x4E200301, 0x00000000,

@@ -111,7 +111,8 @@ def generate_eds(drive=None) -> str:
     std = sorted(i for i in drive.comm.objects if not 0x1400 <= i <= 0x1BFF)
     mandatory = [i for i in std if i in (0x1000, 0x1001, 0x1018)]
     optional = [i for i in std if i not in mandatory]
-    manufacturer = sorted(set(range(0x2000, 0x2100)) | {0x2000 + u for u in drive.params.upids()})
+    # 2000h+UPID reaches UPIDs 0000h..3FFFh only ([CO1100]); 6300h has no object
+    manufacturer = sorted(set(range(0x2000, 0x2100)) | {0x2000 + u for u in drive.params.upids() if u <= 0x3FFF})
     manufacturer = [i for i in manufacturer if drive.mfr.subs_at(i)]
     for name, idx in (("MandatoryObjects", mandatory), ("OptionalObjects", optional),
                       ("ManufacturerObjects", manufacturer)):

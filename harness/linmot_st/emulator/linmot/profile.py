@@ -72,9 +72,11 @@ class Layer:
     tree_id_upid: int
     main_version_upid: int
     sub_version_upid: int
+    # UPIDs a source puts in this layer outside its range (6300h Ready To Operate Mode, seed 004 3.7)
+    upid_extra: tuple[int, ...] = ()
 
     def holds(self, upid: int) -> bool:
-        return self.upid_first <= upid <= self.upid_last
+        return self.upid_first <= upid <= self.upid_last or upid in self.upid_extra
 
 
 @dataclass(frozen=True)
@@ -137,7 +139,7 @@ class DriveProfile:
         for d in defs:
             if d.upid in seen:
                 raise ProfileError(f"UPID {d.upid:04X}h defined twice ({seen[d.upid]!r} and {d.name!r})")
-            if not 0 <= d.upid <= 0x3FFF:
+            if not 0 <= d.upid <= 0x3FFF and not any(d.upid in lay.upid_extra for lay in self.layers):
                 raise ProfileError(f"UPID {d.upid:04X}h is outside 0000h..3FFFh (objects 2000h..5FFFh)")
             seen[d.upid] = d.name
         return sorted(defs, key=lambda d: d.upid)
@@ -271,6 +273,7 @@ def _identity_and_layers(spec: dict) -> tuple[Identity, tuple[Layer, ...]]:
         sub_version=int(lay["sub_version"]), revision=lay.get("revision", ""),
         tree_id_upid=int(lay["tree_id_upid"], 16), main_version_upid=int(lay["main_version_upid"], 16),
         sub_version_upid=int(lay["sub_version_upid"], 16),
+        upid_extra=tuple(int(u, 16) for u in lay.get("upid_extra", ())),
     ) for lay in spec["layers"])
     return identity, layers
 

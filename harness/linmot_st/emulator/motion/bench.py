@@ -77,7 +77,7 @@ def _setup(n_drives: int, motion: MotionSettings | None = None) -> tuple[SimBus,
     """The bench's bus; `motion` (default: the drive's own) lets tests run it with the fast path off."""
     # TxPDO2 on every SYNC (1801h sub 2 = 1) from power-on: a profile cannot set communication objects, so
     # the power-on value is patched the way a master would write it in Pre-Operational
-    profile = load_profile().with_defaults({0x1194: 2, 0x1600: 2_800_000, 0x1601: -100_000})
+    profile = load_profile().with_defaults({0x1194: 2, 0x146F: 2_800_000, 0x146E: -100_000})
     bus = SimBus(1_000_000)
     drives = []
     for n in range(1, n_drives + 1):
