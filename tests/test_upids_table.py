@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from linmot_st.emulator import load_profile
-from linmot_st.emulator.motion import pdo
+from linmot_st.emulator.cia301 import pdo
 from linmot_st.protocol import upids
 from linmot_st.pvl import load_pvl
 
