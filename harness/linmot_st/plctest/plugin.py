@@ -25,6 +25,7 @@ from pathlib import Path
 
 import pytest
 
+from . import scope_plugin
 from .project import INI, Project
 
 MARKERS = [
@@ -35,6 +36,7 @@ MARKERS = [
     "matiec: needs MatIEC's iec2c (set by each_backend on its matiec run)",
     "linmot_st: a test run by the linmot-st plugin",
     "st_test: a test written in ST",
+    scope_plugin.MARKER,
 ]
 _PROJECT = pytest.StashKey[Project]()
 
@@ -45,11 +47,14 @@ def pytest_addoption(parser):
                     help="ST compiler for the project's builds (default: ini linmot_st_backend, else auto)")
     for name, (text, default) in INI.items():
         parser.addini(name, f"{text} (default {default})", default="")
+    scope_plugin.addoption(parser)
 
 
 def pytest_configure(config):
     for line in MARKERS:
         config.addinivalue_line("markers", line)
+    if not config.pluginmanager.has_plugin("linmot_st_scope"):
+        config.pluginmanager.register(scope_plugin, "linmot_st_scope")
 
 
 def project_of(config) -> Project:

@@ -177,6 +177,8 @@ class Rig:
         self.watched: list[str] = list(watch)
         self.faults: list[InjectedFault] = []
         self._armed: list[InjectedFault] = []
+        self.scopes: list = []
+        self._default_scope()
 
     @staticmethod
     def drive_name(node_id: int) -> str:
@@ -228,13 +230,36 @@ class Rig:
             self.plc.step(n)
 
     def step(self, n: int = 1) -> None:
-        """Run n scans (scan by scan while a fault waits for its condition)."""
-        if not self._armed:
+        """Run n scans (scan by scan while a fault waits for its condition or a scope records)."""
+        if not self._armed and not self.scopes:
             self._step_n(n)
             return
         for _ in range(n):
             self._arm()
             self._step_n(1)
+            for s in self.scopes:
+                s.sample()
+
+    # -- scope -------------------------------------------------------------------------------------------
+    def scope(self, *paths: str, every: int = 1, drives: bool = False, write: bool = False):
+        """Record these PLC variables (and drive signals `driveN.position`..., or all drives' with
+        drives=True) every `every` scans from now on; the plugin writes the scope's PNG, VCD and CSV when the
+        test fails (also when it passes with write=True). Returns the Scope (plctest/scope.py)."""
+        from . import scope as scope_mod
+        if every < 1:
+            raise ValueError(f"every={every}: a scope samples every n >= 1 scans")
+        s = scope_mod.Scope(self, scope_mod.signals_of(self, paths, drives), every=every, write_always=write,
+                            observe=self.bus is not None)
+        s.sample()                                        # the state before the next scan
+        self.scopes.append(s)
+        return scope_mod.register(s)
+
+    def _default_scope(self) -> None:
+        """The scope that the ini option linmot_st_scope or the `scope` marker asks of every rig of a test."""
+        from . import scope as scope_mod
+        d = scope_mod.DEFAULTS
+        if d and (d["paths"] or d["drives"]):
+            self.scope(*d["paths"], every=d["every"], drives=d["drives"], write=d["write"])
 
     def _arm(self) -> None:
         for f in list(self._armed):
@@ -388,7 +413,7 @@ class RealTimeRig(Rig):
         self.build, self.spec = build, bus
         self.plc = Plc(build)
         self.drives, self._buses = {}, []
-        self.watched, self.faults, self._armed = list(watch), [], []
+        self.watched, self.faults, self._armed, self.scopes = list(watch), [], [], []
         try:
             # the PLC's side first: a python-can bus receives only what is sent after it opened, and an
             # attached drive boots at once (fast timings: 20 ms), so its boot-up must find the PLC listening
@@ -407,6 +432,7 @@ class RealTimeRig(Rig):
             raise
         self.bus = None
         self.sim = RealTimeCoSim(self.plc, self.can, mailbox=mailbox)
+        self._default_scope()
 
     def _step_n(self, n: int) -> None:
         self.sim.step(n)
