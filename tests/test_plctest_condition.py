@@ -165,6 +165,7 @@ def test_a_cut_condition_fails_with_a_column_inside_it(tree, env, cut):
     ("MAIN.STATE = 'ST_READY' & MAIN.B0", True),
     ("(MAIN.N2 AND 16#4) <> 0", True),                # bit-wise on integers: N2 = 4
     ("MAIN.N0 >= 2#1 AND T#1s = 1_000_000_000 AND T#1m30s = TIME#90s", True),
+    ("INT#-5 + DINT#16#10 = 11 AND LREAL#2.5 * 2 = 5", True),
 ])
 def test_precedence_and_literals(text, value):
     plc = FakePlc({"MAIN.B0": True, "MAIN.B1": False, "MAIN.B2": False, "MAIN.N0": 1, "MAIN.N1": 3,
@@ -185,6 +186,7 @@ def test_precedence_and_literals(text, value):
     ("MAIN.N0 < MAIN.N1 < 3", 19, "< compares BOOL with INT"),
     ("MAIN.B0 + 1 = 2", 9, "+ takes numbers, not BOOL and INT"),
     ("T#3x > 0", 1, "not a duration"),
+    ("INT#x5 > 0", 1, "INT#x5: not a INT literal"),
 ])
 def test_errors_say_where(text, column, message):
     plc = FakePlc({"MAIN.B0": True, "MAIN.B1": False, "MAIN.N0": 1, "MAIN.N1": 3})

@@ -56,7 +56,7 @@ POW.2: "**"                                // .2: before MUL's "*"
 REAL.3: /\d[\d_]*\.\d[\d_]*([eE][+-]?\d+)?|\d[\d_]*[eE][+-]?\d+/
 BASED.3: /(2|8|16)#[0-9A-Fa-f_]+/
 DURATION.3: /(T|TIME|LT|LTIME)#-?[0-9_.a-zA-Z]+/i
-TYPED.2: /[A-Za-z_]\w*#[\w.+\-]+/
+TYPED.2: /[A-Za-z_]\w*#[\w.+\-#]+/
 INT: /\d[\d_]*/
 STRING: /'(\$.|[^'$])*'|"[^"]*"/
 PATH: /%[IQM][XBWDL]?\d+(\.\d+)*/
@@ -242,11 +242,15 @@ class _Compiler:
             v = value.upper() in ("TRUE", "1")
             return _Typed(lambda: v, "BOOL")
         if t in _INTEGER_TYPES or t in _REAL_TYPES:
-            inner = _parser().parse(value)
-            res = self.compile(inner) if isinstance(inner, Token) else None
-            if res is None or res.kind not in ("INT", "REAL") or res.bare:
+            sign = -1 if value.startswith("-") else 1                  # INT#-5
+            try:
+                inner = _parser().parse(value.lstrip("+-"))
+            except UnexpectedInput:
+                inner = None
+            if not (isinstance(inner, Token) and inner.type in ("INT", "REAL", "BASED")):
                 self.fail(tok.column, f"{tok}: not a {t} literal")
-            return _Typed(res.fn, "REAL" if t in _REAL_TYPES else "INT")
+            v = sign * self.operand(inner).fn()
+            return _Typed(lambda: v, "REAL" if t in _REAL_TYPES else "INT")
         return _Typed(lambda: value, "ENUM", (value,))       # an enum value; the other side checks its type
 
     def variable(self, tok: Token) -> _Typed:
