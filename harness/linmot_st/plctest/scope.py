@@ -168,7 +168,7 @@ def _vcd_value(s: Signal, v: Any) -> Any:
 def _observe(drive: Any, t: int) -> None:
     mc = getattr(drive, "mc", None)
     if mc is not None and mc.running:
-        mc.observe(t)                                  # cycles computed ahead taken over; nothing changes later
+        mc.observe(t)                                  # t <= the bus time: nothing changes what happens later
 
 
 # ---- signals -------------------------------------------------------------------------------------------------
