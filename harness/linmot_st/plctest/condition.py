@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass, field
-from functools import lru_cache
+from functools import lru_cache, partial
 from typing import Any, Callable
 
 from lark import Lark, Token, Tree
@@ -140,8 +140,8 @@ def condition(plc: Any, cond: str | Callable[[], Any], what: str | None = None) 
     top = comp.compile(parse(text))
     if top.kind not in ("BOOL", "ANY"):
         raise ConditionError(text, 1, f"the condition is {top.kind}, not BOOL (compare it, e.g. ... <> 0)")
-    fn = top.fn
-    return Condition(lambda: bool(fn()), what or text, comp.paths)
+    fn = top.fn                       # a BOOL expression's evaluator returns a bool already
+    return Condition(fn if top.kind == "BOOL" else (lambda: bool(fn())), what or text, comp.paths)
 
 
 # ---- the compiler: syntax tree -> typed closures ---------------------------------------------------------
@@ -261,7 +261,9 @@ class _Compiler:
             raise ConditionError(self.text, tok.column, f"{exc.args[0] if exc.args else exc}") from None
         if path not in self.paths:
             self.paths.append(path)
-        fn = lambda: var.value  # noqa: E731 - the bound accessor: no lookup per scan
+        getter = getattr(type(var), "value", None)
+        fn = (partial(getter.fget, var) if isinstance(getter, property)       # the bound accessor's getter,
+              else lambda: var.value)                                           # called from C: no lookup
         vtype = str(getattr(var, "type", "")).upper()
         names = tuple(getattr(var, "_names", ()) or getattr(getattr(var, "_info", None), "values", None) or ())
         bare = path if "." not in path and "[" not in path else None
