@@ -16,7 +16,7 @@ from linmot_st import resources
 from linmot_st.emulator import DriveTimings, E1100Drive, load_profile
 from linmot_st.plctest import FbFailed, RealTimeRig, Rig, RigTimeout
 from linmot_st.plctest.project import Project
-from linmot_st.plctest.rig import condition
+from linmot_st.plctest.rig import ConditionError, condition
 
 EXAMPLE = resources.CHECKOUT / "examples" / "user_project"
 ST = "MAIN.STATION"
@@ -30,13 +30,20 @@ def station():
 def test_conditions_in_iec_text(station):
     rig = Rig(station, timings="fast")
     assert condition(rig.plc, f"{ST}.STATE = ST_BOOT").test()
-    assert not condition(rig.plc, f"NOT {ST}.STATE = ST_BOOT").test()
+    assert not condition(rig.plc, f"NOT ({ST}.STATE = ST_BOOT)").test()
+    with pytest.raises(ConditionError, match=r"column 1: NOT takes a BOOL, not ENUM"):
+        condition(rig.plc, f"NOT {ST}.STATE = ST_BOOT")         # IEC: NOT binds before =
+    assert condition(rig.plc, f"{ST}.STATE = ST_BOOT AND NOT {ST}.READY OR {ST}.ERROR").test()
+    assert condition(rig.plc, f"{ST}.DATAINDEX * 2 - 1 = {ST}.DATAINDEX").test()   # two variables, arithmetic
     assert condition(rig.plc, f"{ST}.DATAINDEX >= 1").test() and not condition(rig.plc, f"{ST}.DATAINDEX > 1").test()
     assert condition(rig.plc, f"{ST}.DATAINDEX <> 16#02").test() and not condition(rig.plc, f"{ST}.READY").test()
     with pytest.raises(Exception, match="NOSUCH"):
         condition(rig.plc, f"{ST}.NOSUCH")                      # an unknown path fails before any scan
     assert rig.plc.scan_count == 0
-    k = rig.step_until(f"{ST}.STATE = ST_COMMISSION", ms=100)
+    with pytest.raises(ConditionError, match=r"column 42: the condition ends too early \(expected \)"):
+        rig.step_until(f"{ST}.READY OR (MAIN.STATION.ERROR", ms=100)   # a syntax error: before any scan
+    assert rig.plc.scan_count == 0
+    k = rig.step_until(f"{ST}.STATE = ST_COMMISSION OR {ST}.ERROR", ms=100)
     assert 20 <= k <= 23 and rig.plc.scan_count == k          # fast timings: the boot-up message after 20 ms
 
 

@@ -27,6 +27,7 @@ import pytest
 
 from linmot_st.toolchain.backends import CHOICES
 
+from . import scope_plugin
 from .project import INI, Project, project_of
 from .stunit import StFile
 
@@ -38,6 +39,7 @@ MARKERS = [
     "matiec: needs MatIEC's iec2c (set by each_backend on its matiec run)",
     "linmot_st: a test run by the linmot-st plugin",
     "st_test: a test written in ST",
+    scope_plugin.MARKER,
 ]
 
 
@@ -47,11 +49,14 @@ def pytest_addoption(parser):
                     help="ST compiler for the project's builds (default: ini linmot_st_backend, else auto)")
     for name, (text, default) in INI.items():
         parser.addini(name, f"{text} (default {default})", default="")
+    scope_plugin.addoption(parser)
 
 
 def pytest_configure(config):
     for line in MARKERS:
         config.addinivalue_line("markers", line)
+    if not config.pluginmanager.has_plugin("linmot_st_scope"):
+        config.pluginmanager.register(scope_plugin, "linmot_st_scope")
 
 
 # ---- markers -------------------------------------------------------------------------------------------

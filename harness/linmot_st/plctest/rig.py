@@ -12,12 +12,11 @@
 
 from __future__ import annotations
 
-import ast
-import inspect
-import re
 import time
 from dataclasses import dataclass, field
 from typing import Any, Callable
+
+from .condition import Condition, ConditionError, condition  # noqa: F401 - re-exported: the rig's API
 
 MAILBOX = "CONFIG0.RES0.CAN0"
 FRAMES_SHOWN = 12               # CAN frames in a failure message
@@ -33,78 +32,7 @@ class FbFailed(AssertionError):
     """An FB reported Error (or CommandAborted) where the test expected Done."""
 
 
-# ---- conditions ----------------------------------------------------------------------------------------
-
-_COMPARISON = re.compile(r"^\s*(?P<neg>NOT\s+)?(?P<path>[A-Za-z_%][\w.\[\], %]*?)\s*"
-                         r"(?:(?P<op>==|=|<>|!=|>=|<=|>|<)\s*(?P<value>.+?))?\s*$", re.I)
-_OPS: dict[str, Callable[[Any, Any], bool]] = {
-    "=": lambda a, b: a == b, "==": lambda a, b: a == b, "<>": lambda a, b: a != b, "!=": lambda a, b: a != b,
-    ">=": lambda a, b: a >= b, "<=": lambda a, b: a <= b, ">": lambda a, b: a > b, "<": lambda a, b: a < b}
-
-
-@dataclass
-class Condition:
-    test: Callable[[], bool]
-    text: str
-    paths: list[str] = field(default_factory=list)      # IEC paths it reads (shown on failure)
-
-
-def _literal(text: str) -> Any:
-    """A Python or IEC literal: 5, 16#FF, TRUE, 'LM_COM_DONE' or a bare enum value LM_COM_DONE."""
-    t = text.strip()
-    if re.fullmatch(r"(?i)true|false", t):
-        return t.lower() == "true"
-    m = re.fullmatch(r"(\d+)#([0-9A-Fa-f_]+)", t)
-    if m:
-        return int(m[2].replace("_", ""), int(m[1]))
-    try:
-        return ast.literal_eval(t)
-    except (ValueError, SyntaxError):
-        return t                       # an enum value as the loader reads it: its name
-
-
-def condition(plc: Any, cond: str | Callable[[], Any], what: str | None = None) -> Condition:
-    """A condition from IEC text (`PATH`, `NOT PATH`, `PATH = value`, `PATH >= 3`, `<>` too) or a callable."""
-    if callable(cond):
-        return Condition(lambda: bool(cond()), what or _source_of(cond))
-    m = _COMPARISON.match(cond)
-    if not m:
-        raise ValueError(f"condition {cond!r}: expected PATH, NOT PATH or PATH <op> VALUE (or pass a callable)")
-    path, op, neg = m["path"].strip(), m["op"], bool(m["neg"])
-    var = plc.var(path)                                  # unknown path: fails here, before any scan
-    if op is None:
-        test = (lambda: not var.value) if neg else (lambda: bool(var.value))
-    else:
-        value, fn = _literal(m["value"]), _OPS[op]
-        test = (lambda: not fn(var.value, value)) if neg else (lambda: fn(var.value, value))
-    return Condition(test, what or cond.strip(), [path])
-
-
-def _source_of(fn: Callable) -> str:
-    try:
-        text = inspect.getsource(fn).strip()
-    except (OSError, TypeError):
-        return getattr(fn, "__qualname__", repr(fn))
-    m = re.search(r"lambda\s*:\s*", text)
-    if not m:
-        return " ".join(text.split())
-    body, depth, quote = [], 0, ""
-    for ch in text[m.end():]:                              # the lambda's body: up to a top-level , or )
-        if quote:
-            quote = "" if ch == quote else quote
-        elif ch in "'\"":
-            quote = ch
-        elif ch in "([{":
-            depth += 1
-        elif ch in ")]}":
-            if depth == 0:
-                break
-            depth -= 1
-        elif ch == "," and depth == 0:
-            break
-        body.append(ch)
-    return " ".join("".join(body).split())
-
+# ---- conditions: plctest/condition.py (IEC text parsed, type-checked and compiled before any scan) ---------
 
 # ---- FB results ------------------------------------------------------------------------------------
 
@@ -251,6 +179,8 @@ class Rig:
         self.watched: list[str] = list(watch)
         self.faults: list[InjectedFault] = []
         self._armed: list[InjectedFault] = []
+        self.scopes: list = []
+        self._default_scope()
 
     @staticmethod
     def drive_name(node_id: int) -> str:
@@ -302,13 +232,36 @@ class Rig:
             self.plc.step(n)
 
     def step(self, n: int = 1) -> None:
-        """Run n scans (scan by scan while a fault waits for its condition)."""
-        if not self._armed:
+        """Run n scans (scan by scan while a fault waits for its condition or a scope records)."""
+        if not self._armed and not self.scopes:
             self._step_n(n)
             return
         for _ in range(n):
             self._arm()
             self._step_n(1)
+            for s in self.scopes:
+                s.sample()
+
+    # -- scope -------------------------------------------------------------------------------------------
+    def scope(self, *paths: str, every: int = 1, drives: bool = False, write: bool = False):
+        """Record these PLC variables (and drive signals `driveN.position`..., or all drives' with
+        drives=True) every `every` scans from now on; the plugin writes the scope's PNG, VCD and CSV when the
+        test fails (also when it passes with write=True). Returns the Scope (plctest/scope.py)."""
+        from . import scope as scope_mod
+        if every < 1:
+            raise ValueError(f"every={every}: a scope samples every n >= 1 scans")
+        s = scope_mod.Scope(self, scope_mod.signals_of(self, paths, drives), every=every, write_always=write,
+                            observe=self.bus is not None)
+        s.sample()                                        # the state before the next scan
+        self.scopes.append(s)
+        return scope_mod.register(s)
+
+    def _default_scope(self) -> None:
+        """The scope that the ini option linmot_st_scope or the `scope` marker asks of every rig of a test."""
+        from . import scope as scope_mod
+        d = scope_mod.DEFAULTS
+        if d and (d["paths"] or d["drives"]):
+            self.scope(*d["paths"], every=d["every"], drives=d["drives"], write=d["write"])
 
     def _arm(self) -> None:
         for f in list(self._armed):
@@ -462,7 +415,7 @@ class RealTimeRig(Rig):
         self.build, self.spec = build, bus
         self.plc = Plc(build)
         self.drives, self._buses = {}, []
-        self.watched, self.faults, self._armed = list(watch), [], []
+        self.watched, self.faults, self._armed, self.scopes = list(watch), [], [], []
         try:
             # the PLC's side first: a python-can bus receives only what is sent after it opened, and an
             # attached drive boots at once (fast timings: 20 ms), so its boot-up must find the PLC listening
@@ -481,6 +434,7 @@ class RealTimeRig(Rig):
             raise
         self.bus = None
         self.sim = RealTimeCoSim(self.plc, self.can, mailbox=mailbox)
+        self._default_scope()
 
     def _step_n(self, n: int) -> None:
         self.sim.step(n)

@@ -27,6 +27,7 @@ import pytest
 
 from linmot_st import resources
 
+from . import scope_plugin
 from .project import project_of
 from .rig import Rig, format_frames
 from .stunit_lib import ST_PATH as STUNIT_LIB, describe_failure
@@ -163,6 +164,7 @@ class StItem(pytest.Item):
         if f"{base}.STUNIT.FAILURES" not in plc:
             raise StTestFailed(f"{self.test.name} declares no local `StUnit : T_StUnit` (the record its "
                                "assertions write into)", self._where(self.test.line))
+        scope_plugin.st_scope(self, rig, base)            # ini linmot_st_st_scope
         failures = plc.var(f"{base}.STUNIT.FAILURES")
         done = plc.var(f"{base}.DONE") if f"{base}.DONE" in plc else None
         budget, what = self._budget(plc, base, project)
