@@ -17,6 +17,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from . import codec
 from .layers import LAYERS
 
 
@@ -36,7 +37,7 @@ class DriveType:
 
     def stringlet_upid(self, string_upid: int, k: int) -> int:
         """UPID of stringlet k (k = 1, 2, ...) of the string parameter at `string_upid`."""
-        return string_upid + k - 1 + self.first_stringlet_offset
+        return codec.stringlet_upid(string_upid, k, self.first_stringlet_offset)
 
     def string_upid_of_first(self, first_stringlet_upid: int) -> int:
         return first_stringlet_upid - self.first_stringlet_offset
