@@ -29,6 +29,9 @@ def test_check_names_both_series():
     assert "node 3: b1100_axis.pvl is a PVL file for a B1100" in msg and "node 3 is an E1100" in msg
     with pytest.raises(DriveTypeMismatch, match=r"two_axes.pvl is a PVL file for an E1100 .* is a B1100"):
         check_drive_type(2, _source(e1100, "two_axes.pvl"), "B1100")
+    curves_only = load_pvl(B1100_FILE.with_name("seed_curve.pvl"))    # no tree name: an E1100 file (curves)
+    with pytest.raises(DriveTypeMismatch, match=r"for an E1100 \(no parameter object: curves or command table\)"):
+        check_drive_type(4, _source(curves_only, "seed_curve.pvl"), "B1100")
     check_drive_type(1, _source(b1100, "b1100_axis.pvl"), "b1100")
     check_drive_type(1, _source(e1100, "two_axes.pvl"), "E1100")
 

@@ -110,9 +110,11 @@ def check_drive_type(node: int, source: Source, drive_series: str) -> None:
     want = source.pvl.drive_type
     have = drive_type(drive_series)
     if want is not have:
+        layers = source.pvl.parameter_objects
+        why = f"tree {layers[0].tree_file_name}" if layers else "no parameter object: curves or command table"
         raise DriveTypeMismatch(
-            f"node {node}: {source.name} is a PVL file for {want.a_name} (tree "
-            f"{source.pvl.parameter_objects[0].tree_file_name}), but the drive at node {node} is {have.a_name}: "
+            f"node {node}: {source.name} is a PVL file for {want.a_name} ({why}), "
+            f"but the drive at node {node} is {have.a_name}: "
             f"not commissioned (nothing was written); give node {node} a file for {have.a_name} "
             f"(--pvl {node}=FILE)")
 
