@@ -545,3 +545,33 @@ def test_matiec_and_builtin_put_the_same_frames_on_the_bus():
     if len(available_backends()) < 2:
         pytest.skip(f"needs both backends, found {available_backends()} (MatIEC's iec2c: set MATIEC_HOME)")
     assert frames_of_a_sequence("matiec") == frames_of_a_sequence("builtin")
+
+
+# ---------------------------------------------------------------- a B1100 axis (the ST's LM_B1100 paths)
+def test_b1100_curve_motion_refused_before_any_frame(bc):
+    """A B1100 has no curves (seed 000 5): FB_LmRunCurve fails NotSupported in the call of the edge and sends no
+    motion command (the drive here is an emulated E1100; the refusal depends only on the axis' drive type)."""
+    bc["CH1.DRIVE"] = "LM_B1100"
+    bc.step(1)
+    t0 = bc.plc.time_ns
+    r = bc.fb("CURVE").run(CURVEID=1, MODE="LM_CURVE_DEFAULT")
+    assert r.error and r.error_id == E["NotSupported"] and r.scans == 1
+    bc.step(5)
+    assert bc.payloads(0x301, t0) == []
+    bc["CH1.DRIVE"] = "LM_E1100"                     # the same FB on an E1100 axis runs the curve
+    bc.step(1)
+    assert bc.fb("CURVE").run(CURVEID=1, MODE="LM_CURVE_DEFAULT").done
+
+
+def test_write_live_takes_a_b1100_upid_above_3fffh(b):
+    """The motion command 002xh carries a 16-bit UPID; a B1100's live parameters lie up to FFFFh (6198h P gain,
+    LinRS p.26), an E1100's below 4000h (2000h + UPID)."""
+    r = b.fb("LIVE").run(UPID=0x6198, VALUE=12)
+    assert r.error and r.error_id == E["InvalidUpid"] and r.scans == 1
+    b["CH1.DRIVE"] = "LM_B1100"
+    b.step(1)
+    t0 = b.plc.time_ns
+    r = b.fb("LIVE").run(UPID=0x6198, VALUE=12)
+    assert r.done                                    # the emulated E1100 ignores a UPID it does not know
+    (payload,) = [p for p in b.payloads(0x301, t0) if struct.unpack_from("<H", p)[0] >> 4 == 0x002]
+    assert struct.unpack_from("<H", payload, 2)[0] == 0x6198

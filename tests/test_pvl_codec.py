@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 
 from linmot_st.pvl import CtEntryBlock, CurveInfo, codec, parse_pvl, write_pvl, PvlFile, Curve
+from linmot_st.pvl.drive_types import drive_type
 
 VECTORS = Path(__file__).resolve().parent / "vectors"
 CURVES = json.loads((VECTORS / "curve_info.json").read_text())["curves"]
@@ -55,7 +56,7 @@ def test_stringlet_vectors(vec):
     assert codec.decode_stringlets(values) == vec["text"]
     base = int(vec["string_upid"], 16)
     for k, s in enumerate(vec["stringlets"], start=1):
-        assert int(s["upid"], 16) == codec.stringlet_upid(base, k)
+        assert int(s["upid"], 16) == drive_type(vec.get("drive", "E1100")).stringlet_upid(base, k)
         assert codec.stringlet_text(int(s["value"], 16)) == s["text"]
 
 

@@ -71,14 +71,15 @@ def test_stringlets_pack_and_unpack(c, vec):
     assert c["TEXT"] == vec["text"]
 
 
-@pytest.mark.parametrize("vec", STRINGLETS[:1])
+@pytest.mark.parametrize("vec", STRINGLETS, ids=[f'{s.get("drive", "E1100")}-{s["string_upid"]}-{s["text"] or "empty"}'
+                                                 for s in STRINGLETS])
 def test_stringlet_upids_e1100_and_b1100(c, vec):
+    """The shared vectors' UPIDs: E1100 string UPID + k, B1100 the string UPID itself first (seed 000 2.5)."""
     base = int(vec["string_upid"], 16)
+    drive = "LM_" + vec.get("drive", "E1100")
     for k, s in enumerate(vec["stringlets"], start=1):
-        c.run(4, UPID=base, COUNT=k, DRIVE="LM_E1100")
-        assert c["UPID"] == int(s["upid"], 16)                   # E1100: string UPID + k
-        c.run(4, UPID=base, COUNT=k, DRIVE="LM_B1100")
-        assert c["UPID"] == base + k - 1                          # B1100: the string UPID itself first
+        c.run(4, UPID=base, COUNT=k, DRIVE=drive)
+        assert c["UPID"] == int(s["upid"], 16)
 
 
 def test_stringlet_errors(c):

@@ -68,7 +68,7 @@ ERRORS: tuple[ErrorDef, ...] = (
     ErrorDef("InvalidLayer", 0x0111, "firmware layer outside 1..4"),
     ErrorDef("InvalidStringletCount", 0x0112, "stringlet count outside 1..32"),
     ErrorDef("TextTooLong", 0x0113, "text longer than 4 x the stringlet count"),
-    ErrorDef("NotSupported", 0x0114, "service not supported by this drive type (B1100: curves, command table, defaults, UPID lists)"),
+    ErrorDef("NotSupported", 0x0114, "service or command not supported by this drive type (B1100: curves and curve motions, command table, defaults, UPID lists)"),
     ErrorDef("NothingSelected", 0x0115, "flash save with neither Curves nor CommandTable selected"),
     ErrorDef("InvalidUpidRange", 0x0116, "UPID list: start UPID above end UPID"),
     ErrorDef("InvalidSdoCommand", 0x0117, "raw SDO: index below 1000h or above 5FFFh"),

@@ -4,6 +4,9 @@ plc_project has one dataset variable (Ds : T_PvlData) and gives each axis the wo
 starts (DataBases[k], plc_project/commission.st). With one PVL file T_PvlData is that file's dataset
 (`pvl to-st`, so the committed plc_project serves it); with several, the distinct datasets are laid out
 one after the other in one T_PvlData, each from the word its axes' DataBases name.
+
+A PVL file is for one drive series (linmot_st.pvl.drive_types); `check_drive_type` refuses a node whose drive
+is of another series before anything is sent to it.
 """
 
 from __future__ import annotations
@@ -12,6 +15,7 @@ import hashlib
 from dataclasses import dataclass, field
 
 from linmot_st.pvl.dataset import Dataset, from_pvl
+from linmot_st.pvl.drive_types import drive_type
 from linmot_st.pvl.to_st import DEFAULT_TYPE, _comment, read_st, to_st
 
 WORDS_PER_LINE = 8
@@ -93,6 +97,32 @@ class Datasets:
         body[-1] = last[:last.index(",  (*")] + last[last.index(",  (*") + 1:] if ",  (*" in last else last[:-1]
         return "\n".join(head + ["TYPE", f"  {DEFAULT_TYPE} : ARRAY[1..{len(words)}] OF DWORD := [", *body,
                                  "  ];", "END_TYPE", ""])
+
+
+class DriveTypeMismatch(ValueError):
+    """A node's dataset is for another drive series than the node's drive (the message names both)."""
+
+
+def check_drive_type(node: int, source: Source, drive_series: str) -> None:
+    """Refuse to commission `node`, whose drive is of `drive_series` ("E1100", "B1100"), with `source`'s
+    PVL file when that file is for another series: the layouts differ (stringlets, UPIDs, tree identity, curves),
+    so nothing of it may be written. Raises DriveTypeMismatch."""
+    want = source.pvl.drive_type
+    have = drive_type(drive_series)
+    if want is not have:
+        layers = source.pvl.parameter_objects
+        why = f"tree {layers[0].tree_file_name}" if layers else "no parameter object: curves or command table"
+        raise DriveTypeMismatch(
+            f"node {node}: {source.name} is a PVL file for {want.a_name} ({why}), "
+            f"but the drive at node {node} is {have.a_name}: "
+            f"not commissioned (nothing was written); give node {node} a file for {have.a_name} "
+            f"(--pvl {node}=FILE)")
+
+
+def drive_series(drive) -> str:
+    """The drive series of an emulated drive: its profile's (emulator/linmot/profile.py Definitions.series)."""
+    definitions = getattr(getattr(drive, "profile", None), "definitions", None)
+    return getattr(drive, "series", None) or getattr(definitions, "series", None) or "E1100"
 
 
 def _words(s: Source) -> tuple[int, ...]:

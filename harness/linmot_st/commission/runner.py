@@ -374,7 +374,7 @@ def run(pvl, opts: RunOptions, build_result, *, dataset=None, datasets=None, pro
         datasets = Datasets(Source(pvl, dataset or from_pvl(pvl), getattr(pvl, "filename", None) or "PVL"))
     timeout_s = opts.timeout_s or run_timeout_s(datasets, nodes, opts)
     plc = Plc(build_result)
-    factory = drive_factory or (lambda n: emulated_drive(n, opts))
+    factory = _checked_factory(drive_factory or (lambda n: emulated_drive(n, opts)), datasets)
     bases = datasets.bases(nodes)
     if opts.simulated:
         res = _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, timeout_s, after, bases)
@@ -382,6 +382,18 @@ def run(pvl, opts: RunOptions, build_result, *, dataset=None, datasets=None, pro
         res = _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s, after, bases)
     res.datasets = datasets
     return res
+
+
+def _checked_factory(factory, datasets):
+    """The drive factory, refusing a drive whose series is not what its node's PVL file is for (before the
+    drive is powered on, so before the PLC sends it anything)."""
+    from .datasets import check_drive_type, drive_series
+
+    def make(node: int):
+        drive = factory(node)
+        check_drive_type(node, datasets.of(node), drive_series(drive))
+        return drive
+    return make
 
 
 def _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, timeout_s, after, bases) -> RunResult:

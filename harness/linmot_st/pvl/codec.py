@@ -102,9 +102,10 @@ def encode_stringlets(text: str, count: int | None = None) -> tuple[int, ...]:
     return struct.unpack(f"<{count}I", raw)
 
 
-def stringlet_upid(string_upid: int, k: int) -> int:
-    """E1100/E1200: stringlet k (k = 1, 2, ...) of a string parameter has UPID string UPID + k."""
-    return string_upid + k
+def stringlet_upid(string_upid: int, k: int, first_offset: int = 1) -> int:
+    """UPID of stringlet k (k = 1, 2, ...) of a string parameter: string UPID + k on the E1100/E1200
+    (first_offset 1), string UPID + k - 1 on the B1100 (first_offset 0; seed 000 2.5)."""
+    return string_upid + k - 1 + first_offset
 
 
 # --- names in fixed-size fields ---------------------------------------------------------------------

@@ -4,7 +4,8 @@ checked against the files by the tests (`python -m linmot_st.pvl.demo examples/`
 - seed_parameters.pvl: the seeds' Figure 13, with the elided MC rows ('……') filled with
   a few parameters of `MC_PARAMETERS` (docs/pvl.md lists which rows were added);
 - seed_curve.pvl: the seeds' Figure 14, unchanged;
-- two_axes.pvl: what `make demo` commissions onto each of two axes.
+- two_axes.pvl: what `make demo` commissions onto each of two axes;
+- b1100_axis.pvl: a B1100 value list (OS strings, MC parameters; no curves, no command table; docs/pvl.md).
 
 The MC parameter UPIDs are those of the emulated drive's parameter table (emulator/data/), in the MC layer
 range 1000h..1EFFh: 1194h (Motor Type) from the seeds; 146Eh/146Fh (min/max position), 1473h (max
@@ -20,6 +21,7 @@ import sys
 from pathlib import Path
 
 from . import codec
+from .drive_types import B1100, E1100, DriveType
 from .model import CommandTableEntry, Curve, Parameter, ParameterObject, PvlFile
 from .writer import write_pvl
 
@@ -62,10 +64,10 @@ SEED_CURVE_DATA_WORDS = (0x00000000, 0x000075CA, 0x0001C8F2, 0x0003D090, 0x00064
                          0x000B71B0, 0x000D794E, 0x000ECC76, 0x000F4240)
 
 
-def string_rows(string_upid: int, caption: str, text: str) -> list[Parameter]:
+def string_rows(string_upid: int, caption: str, text: str, drive: DriveType = E1100) -> list[Parameter]:
     """The stringlet rows LinMot-Talk writes for a string parameter (all 8 stringlets)."""
     values = codec.encode_stringlets(text, STRINGLETS_PER_STRING)
-    return [Parameter(codec.stringlet_upid(string_upid, k), v, f"{caption}_{k}", codec.stringlet_text(v))
+    return [Parameter(drive.stringlet_upid(string_upid, k), v, f"{caption}_{k}", codec.stringlet_text(v))
             for k, v in enumerate(values, start=1)]
 
 
@@ -130,10 +132,41 @@ def two_axes_file() -> PvlFile:
     ))
 
 
+# b1100_axis.pvl: the trees of the emulated B1100 (emulator/data/b1100_default.json: names with "B1100", tree IDs
+# and versions INVENTED) and UPIDs of its parameter table (b1100_parameters.csv: 7078h User Comment from seed 000
+# 2.5, E19Ch Max Current from the CANopen manual p.33 with its example value 3000, 6198h P Gain from LinRS p.26,
+# 6300h from seed 004 3.7; the Dxxxh rows are that table's INVENTED UPIDs). Every value differs from the table's.
+B1100_OS_TREE = dict(tree_file_name="OSTREEB1100OS_V3S0_b1", layer=1, tree_id=257, main_version=3, sub_version=0,
+                     revision="b1")
+B1100_MC_TREE = dict(tree_file_name="MCTREEB1100DSW4_V3S0_b1", layer=2, tree_id=4868, main_version=3,
+                     sub_version=0, revision="b1")
+B1100_CONTROLLER_NAME_UPID = 0x7070   # INVENTED (b1100_parameters.csv)
+B1100_USER_COMMENT_UPID = 0x7078      # seed 000 2.5: stringlets 7078h, 7079h, ...
+B1100_MC_PARAMETERS = [
+    (0x6198, 0x0000000C, r"Motion Control SW\Position Controller\Control Parameter Set A\P Gain", "0.12 A/mm"),
+    (0x6300, 0x00000002, r"Motion Control SW\State Machine Setup\Ready To Operate Mode", "Position Controlled"),
+    (0xD46E, 0xFFFE7960, r"Motion Control SW\Position Limits\Negative Limit", "-10 mm"),
+    (0xD46F, 0x001E8480, r"Motion Control SW\Position Limits\Positive Limit", "200 mm"),
+    (0xD472, 0x00004E20, r"Motion Control SW\Position Controller\Position Lag Always Warn Level", "2 mm"),
+    (0xD473, 0x0000C350, r"Motion Control SW\Position Controller\Position Lag Always Error Level", "5 mm"),
+    (0xD4BE, 0x0016E360, r"Motion Control SW\Motion Interface\Predefined VA Interpolator\Maximal Velocity", "1.5 m/s"),
+    (0xD502, 0x0000C350, r"Motion Control SW\State Machine Setup\Homing\Initial Position", "5 mm"),
+    (0xE19C, 0x00000BB8, r"Motion Control SW\Motor Configuration\Max Current", "3 A"),
+]
+
+
+def b1100_axis_file() -> PvlFile:
+    os_rows = (string_rows(B1100_CONTROLLER_NAME_UPID, r"OS\Controller Name", "LinMot-ST B1100", B1100)
+               + string_rows(B1100_USER_COMMENT_UPID, r"OS\User Comment", "Y Axis Right", B1100))
+    return PvlFile((ParameterObject(**B1100_OS_TREE, parameters=tuple(os_rows)),
+                    ParameterObject(**B1100_MC_TREE, parameters=tuple(Parameter(*r) for r in B1100_MC_PARAMETERS))))
+
+
 EXAMPLES = {
     "seed_parameters.pvl": seed_parameters_file,
     "seed_curve.pvl": seed_curve_file,
     "two_axes.pvl": two_axes_file,
+    "b1100_axis.pvl": b1100_axis_file,
 }
 
 

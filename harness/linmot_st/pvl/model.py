@@ -17,6 +17,7 @@ from typing import Iterator, Mapping, Union
 
 from . import codec
 from .codec import CtEntryBlock, CurveInfo
+from .drive_types import E1100, DriveType, drive_type_of_tree_file
 from .layers import LAYERS, TreeIdentity
 
 
@@ -49,7 +50,7 @@ class Parameter:
 class StringParameter:
     """A string parameter recognised among the rows (see `ParameterObject.strings`)."""
 
-    upid: int                              # the string's own UPID; stringlet k is at upid + k
+    upid: int                              # the string's own UPID; stringlet k at upid + k (E1100), + k - 1 (B1100)
     name: str                              # the caption without the stringlet suffix
     text: str
     stringlets: tuple[Parameter, ...]
@@ -76,6 +77,16 @@ class ParameterObject:
         return TreeIdentity(self.layer, self.tree_id, self.main_version, self.sub_version)
 
     @property
+    def drive_type(self) -> DriveType:
+        """The drive series this layer's tree is for (from @TreeFileName; drive_types.py)."""
+        return drive_type_of_tree_file(self.tree_file_name)
+
+    @property
+    def identity_upids(self) -> tuple[int, int, int]:
+        """Where the drive reports this layer's tree ID, main and sub version (seed 000 Table 4)."""
+        return self.drive_type.identity_upids.get(self.layer, (0, 0, 0))
+
+    @property
     def layer_name(self) -> str:
         return LAYERS[self.layer].name if self.layer in LAYERS else f"layer {self.layer}"
 
@@ -83,10 +94,11 @@ class ParameterObject:
         return next((p for p in self.parameters if p.upid == upid), None)
 
     def string(self, string_upid: int) -> str | None:
-        """The string parameter at `string_upid`, from its stringlets (UPID + 1, + 2, ...) present here."""
+        """The string parameter at `string_upid`, from its stringlets present here (E1100: UPID + 1, + 2, ...;
+        B1100: UPID + 0, + 1, ...)."""
         values = []
         k = 1
-        while (p := self.get(codec.stringlet_upid(string_upid, k))) is not None:
+        while (p := self.get(self.drive_type.stringlet_upid(string_upid, k))) is not None:
             values.append(p.value)
             k += 1
         return codec.decode_stringlets(values) if values else None
@@ -94,7 +106,7 @@ class ParameterObject:
     def strings(self) -> tuple[StringParameter, ...]:
         """The string parameters among the rows. A PVL file has no type column, so a run of rows is
         taken as the stringlets of one string when their captions read `NAME_1`, `NAME_2`, ... at UPIDs
-        S+1, S+2, ... and each row's scaled value is its stringlet's characters (as LinMot-Talk writes
+        S+1, S+2, ... (B1100: S, S+1, ...) and each row's scaled value is its stringlet's characters (as LinMot-Talk writes
         them: `03F3,78412058,OS\\User Comment_1,X Ax`)."""
         found: list[StringParameter] = []
         rows = self.parameters
@@ -104,14 +116,15 @@ class ParameterObject:
             if not m or m.group(2) != "1" or not _is_stringlet(rows[i]):
                 i += 1
                 continue
-            name, base = m.group(1), rows[i].upid - 1
+            name, base = m.group(1), self.drive_type.string_upid_of_first(rows[i].upid)
+            first = rows[i].upid
             run = [rows[i]]
             j = i + 1
             while j < len(rows):
                 mj = _STRINGLET_CAPTION.fullmatch(rows[j].caption)
                 k = len(run) + 1
                 if not (mj and mj.group(1) == name and mj.group(2) == str(k)
-                        and rows[j].upid == base + k and _is_stringlet(rows[j])):
+                        and rows[j].upid == first + k - 1 and _is_stringlet(rows[j])):
                     break
                 run.append(rows[j])
                 j += 1
@@ -207,6 +220,22 @@ class PvlFile:
     objects: tuple[PvlObject, ...] = ()
     format_version: int = 1
     filename: str | None = field(default=None, compare=False)
+
+    @property
+    def drive_types(self) -> tuple[DriveType, ...]:
+        """The drive series the Parameter objects are for, each once, in file order (validate.py refuses
+        a file with more than one)."""
+        out: list[DriveType] = []
+        for o in self.parameter_objects:
+            if o.drive_type not in out:
+                out.append(o.drive_type)
+        return tuple(out)
+
+    @property
+    def drive_type(self) -> DriveType:
+        """The drive series the file is for: that of its Parameter objects (E1100 for a file without)."""
+        types = self.drive_types
+        return types[0] if types else E1100
 
     @property
     def parameter_objects(self) -> tuple[ParameterObject, ...]:

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from . import codec
-from .layers import LAYERS
 from .model import PvlFile
 
 
@@ -11,17 +10,17 @@ def summary(pvl: PvlFile, *, verbose: bool = False) -> str:
     layers, curves, entries = pvl.parameter_objects, pvl.curves, pvl.command_table
     out = [f"{pvl.filename or '<model>'}: PVL format {pvl.format_version}: "
            f"{_n(len(layers), 'parameter layer')}, {_n(len(curves), 'curve')}, "
-           f"{_n(len(entries), 'command-table entry', 'command-table entries')}"]
+           f"{_n(len(entries), 'command-table entry', 'command-table entries')}, "
+           f"for {pvl.drive_type.a_name}"]
     for obj in layers:
         out.append("")
         out.append(f"Layer {obj.layer} ({obj.layer_name}): tree {obj.tree_file_name}, tree ID {obj.tree_id}, "
                    f"version {obj.main_version}.{obj.sub_version}, revision {obj.revision}: "
                    f"{_n(len(obj.parameters), 'parameter')}")
-        layer = LAYERS.get(obj.layer)
-        if layer:
-            out.append(f"  compatibility: the drive's UPID {layer.tree_id_upid:04X}h must read {obj.tree_id}, "
-                       f"{layer.main_version_upid:04X}h {obj.main_version}, "
-                       f"{layer.sub_version_upid:04X}h {obj.sub_version} or more")
+        if obj.layer in obj.drive_type.identity_upids:
+            tree, main, sub = obj.identity_upids
+            out.append(f"  compatibility: the drive's UPID {tree:04X}h must read {obj.tree_id}, "
+                       f"{main:04X}h {obj.main_version}, {sub:04X}h {obj.sub_version} or more")
         strings = obj.strings()
         in_strings = {p.upid for s in strings for p in s.stringlets}
         for s in strings:

@@ -60,6 +60,8 @@ def to_st(pvl, type_name: str = DEFAULT_TYPE, source_name: str | None = None) ->
         f"   {len(layers)} parameter layer(s), {n_params} parameter(s), {len(curves)} curve(s) ({n_points} setpoints), "
         f"{len(entries)} command-table entr{'y' if len(entries) == 1 else 'ies'}; {len(words)} words; content {digest}.",
     ]
+    if pvl.drive_type.name != "E1100":      # E1100 files keep their text (plc_project/dataset.st)
+        head.append(f"   For {pvl.drive_type.a_name} drive (tree file names, docs/pvl.md).")
     for o in layers:
         head.append(f"   layer {o.layer} {_comment(o.layer_name)}: tree {_comment(o.tree_file_name)}, tree ID {o.tree_id}, "
                     f"version {o.main_version}.{o.sub_version}")

@@ -25,6 +25,7 @@ def validate(pvl: PvlFile) -> list[Diagnostic]:
     layers: dict[int, ParameterObject] = {}
     curves: dict[int, Curve] = {}
     entries: dict[int, CommandTableEntry] = {}
+    out += _check_drive_type(pvl)
     for obj in pvl.objects:
         if isinstance(obj, ParameterObject):
             out += _check_parameter_object(obj)
@@ -71,7 +72,8 @@ def _check_parameter_object(obj: ParameterObject) -> list[Diagnostic]:
     for key, text in (("TreeFileName", obj.tree_file_name), ("Revision", obj.revision)):
         if msg := text_problem(text, trailing_space=False):
             out.append(_at(obj.source, key, f"{where}: @{key} {msg}"))
-    layer = LAYERS.get(obj.layer)
+    # E1100 UPIDs lie in their layer's range (Table 3); B1100 UPIDs of all layers are mixed (seed 000 3)
+    layer = LAYERS.get(obj.layer) if obj.drive_type.layer_ranges else None
     seen: dict[int, Parameter] = {}
     for p in obj.parameters:
         out += _check_parameter(p, where, layer)
@@ -98,6 +100,26 @@ def _check_parameter(p: Parameter, where: str, layer) -> list[Diagnostic]:
         out.append(Diagnostic(p.line, f"{where}: UPID {p.upid:04X}h: caption {msg}"))
     if msg := text_problem(p.scaled_value, trailing_space=False):
         out.append(Diagnostic(p.line, f"{where}: UPID {p.upid:04X}h: scaled value {msg}"))
+    return out
+
+
+def _check_drive_type(pvl: PvlFile) -> list[Diagnostic]:
+    """One drive series per file; no curve or command-table object in a file for a series without them."""
+    out = []
+    objs = pvl.parameter_objects
+    kind = pvl.drive_type
+    for o in objs:
+        if o.drive_type is not kind:
+            out.append(_at(o.source, "TreeFileName",
+                           f"layer {o.layer}: tree {o.tree_file_name!r} is for {o.drive_type.a_name}, "
+                           f"layer {objs[0].layer}'s tree {objs[0].tree_file_name!r} for {kind.a_name} "
+                           "(one file is for one drive series)"))
+    for c in pvl.curves if not kind.curves else ():
+        out.append(_at(c.source, None, f"a curve object in a file for {kind.a_name}: the {kind.name} has no "
+                                       "curves (seed 000 chapter 5)"))
+    for e in pvl.command_table if not kind.command_table else ():
+        out.append(_at(e.source, None, f"a command-table object in a file for {kind.a_name}: the {kind.name} "
+                                       "has no command table (seed 000 chapter 6)"))
     return out
 
 
