@@ -22,7 +22,7 @@ from .curves import CurveStore
 from .errorlog import ErrorLog
 from .manufacturer import ManufacturerObjects, Reply
 from .motion import MotionControl, MotionSettings, ProcessData
-from .motion.words import ERROR, SETUP_ERROR
+from ..protocol.words import ERROR, SETUP_ERROR
 from .options import ProtocolOptions
 from .params import ParameterStore
 from .profile import DriveProfile, load_profile

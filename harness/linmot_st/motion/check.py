@@ -13,7 +13,7 @@ from __future__ import annotations
 import struct
 from dataclasses import dataclass, field
 
-from linmot_st.emulator.motion import commands as C
+from linmot_st.protocol import commands as C
 
 from .plan import (CURVE_ACTUAL_TOLERANCE_MM, CURVE_DEMAND_TOLERANCE_MM, MM, POSITION_TOLERANCE_MM, Plan)
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 import struct
 from dataclasses import dataclass, field
 
-from linmot_st.emulator.motion import commands as C
+from linmot_st.protocol import commands as C
 
 MM = 10_000                     # 0.1 um per mm
 MAX_STEPS = 24                  # T_PlcSteps

@@ -9,12 +9,11 @@ setpoint generation, the axis that follows it, the drive's PDOs, and the traject
 """
 
 from .axis import Axis
-from .commands import COMMANDS, CommandDef, decode, encode
 from .control import MotionControl
 from .pdo import ProcessData
 from .settings import MotionSettings
 from .setpoints import CurvePlan, StopPlan, VaPlan
 from .trajectory import Sample, Trajectory
 
-__all__ = ["Axis", "COMMANDS", "CommandDef", "CurvePlan", "MotionControl", "MotionSettings", "ProcessData",
-           "Sample", "StopPlan", "Trajectory", "VaPlan", "decode", "encode"]
+__all__ = ["Axis", "CurvePlan", "MotionControl", "MotionSettings", "ProcessData", "Sample", "StopPlan",
+           "Trajectory", "VaPlan"]

@@ -19,7 +19,7 @@ import time
 from ...bus import Frame, SimBus
 from ..drive import DriveTimings, E1100Drive
 from ..profile import load_profile
-from . import commands as C
+from ...protocol import commands as C
 from .settings import MotionSettings
 
 MS = 1_000_000

@@ -29,8 +29,8 @@ from ...protocol.upids import (  # noqa: F401 (re-exported for the MC's modules)
     V_LOGGED_ERROR, V_DEMAND_POSITION, V_TARGET_POSITION, V_POSITION_DIFFERENCE, V_DEMAND_VELOCITY,
     V_ACTUAL_VELOCITY,
 )
-from . import commands as C
-from . import words as W
+from ...protocol import commands as C
+from ...protocol import words as W
 from .axis import Axis
 from .ct_runner import CtRunner
 from .settings import MotionSettings
@@ -43,18 +43,6 @@ HOMING_SEARCH = {2: +1, 3: -1, 4: +1, 5: -1}       # mech stop / home switch, po
 # unit conversions: the interface's units to pu (0.1 um), pu/s, pu/s^2
 VEL_RAW = 10.0       # 1E-6 m/s = 10 pu/s
 ACC_RAW = 100.0      # 1E-5 m/s^2 = 100 pu/s^2
-
-# commands that set a position and so need the axis homed (INFERRED list, settings.motion_requires_homing)
-_NEEDS_HOMING = {
-    C.VAI_GO_TO_POS, C.VAI_INCREMENT_DEM_POS, C.VAI_INCREMENT_TARGET_POS, C.VAI_GO_TO_POS_FROM_ACT_POS_AND_VEL,
-    C.VAI_GO_TO_POS_FROM_ACT_POS_VEL_0, C.VAI_INCREMENT_ACT_POS, C.VAI_INCREMENT_ACT_POS_VEL_0,
-    C.PREDEF_VAI_GO_TO_POS, C.PREDEF_VAI_INCREMENT_DEM_POS, C.PREDEF_VAI_INCREMENT_TARGET_POS,
-    C.TIME_CURVE, C.TIME_CURVE_FROM_ACT_POS, C.TIME_CURVE_TO_POS, C.TIME_CURVE_TO_POS_TIME,
-    C.TIME_CURVE_OFFSET_TIME_SCALE_AMP, C.TIME_CURVE_OFFSET_TIME_AMP,
-    C.VAI16_GO_TO_POS, C.VAI16_INCREMENT_DEM_POS, C.VAI16_INCREMENT_TARGET_POS, C.START_COMMAND_TABLE,
-}
-# commands executed in any state of the running MC, not only in Operation Enabled
-_ANY_STATE = {C.NOP, C.WRITE_CONTROL_WORD, C.WRITE_LIVE_PARAMETER}
 
 _PLAIN_STATES = frozenset({W.READY_TO_OPERATE, W.OPERATION_ENABLED, W.ABORTING, W.FREEZING})
 
@@ -184,8 +172,8 @@ class MotionControl:
         if not self.running:
             return
         self.last_header = header & 0xFFFF
-        cid = C.command_id(header)
-        if cid not in _ANY_STATE and self.state != W.OPERATION_ENABLED:
+        c = C.COMMANDS.get(C.command_id(header))
+        if self.state not in (c.states if c is not None else C.IN_OPERATION_ENABLED):
             if self.state == W.READY_TO_OPERATE or (self.state >= W.HOMING and self.state != W.ERROR_QUICK_STOP):
                 self._fail(W.ERR_MOTION_CMD_WRONG_STATE, t)     # seed 004 3.7: error, state 4
                 self._record(t)
@@ -202,7 +190,7 @@ class MotionControl:
         if c is None:
             return self._fail(W.ERR_UNKNOWN_MOTION_CMD, t)
         cid = c.cid
-        if cid in _NEEDS_HOMING and self.s.motion_requires_homing and not self.homed:
+        if c.needs_homing and self.s.motion_requires_homing and not self.homed:
             return self._fail(W.ERR_NOT_HOMED, t)
         if cid == C.NOP or cid in (C.WAIT_TIME, C.WAIT_MOTION_FINISHED, C.WAIT_IN_TARGET_POSITION):
             return True         # waits act only inside a command-table sequence (ct_runner.py)
