@@ -4,6 +4,7 @@ encoder encodes it as the Python codec does."""
 
 from __future__ import annotations
 
+import json
 import sys
 from pathlib import Path
 
@@ -41,6 +42,17 @@ def test_rows_are_consistent():
     assert C.COMMANDS[C.VAI_GO_TO_POS].transport is C.Transport.COMMAND_TABLE      # 16 bytes: only in a CT entry
     assert C.COMMANDS[C.VAI16_GO_TO_POS].transport is C.Transport.RXPDO3          # 8 bytes
     assert C.COMMANDS[C.PREDEF_VAI_GO_TO_POS].transport is C.Transport.RXPDO2     # 4 bytes
+
+
+def test_the_python_codec_against_the_shared_vectors():
+    """The vectors the ST encoder is checked against (test_motion_fbs.py) hold for the catalogue's codec too."""
+    vectors = json.loads((Path(__file__).parent / "vectors" / "motion_commands.json").read_text())["vectors"]
+    for v in vectors:
+        cid, image = int(v["cid"], 16), bytes.fromhex(v["image"])
+        assert C.encode(cid, v["count"], **v["fields"]) == image, v["name"]
+        row, fields = C.decode(int.from_bytes(image[:2], "little"), image[2:])
+        assert row is C.COMMANDS[cid] and fields == v["fields"], v["name"]
+    assert {int(v["cid"], 16) for v in vectors} <= set(C.COMMANDS)
 
 
 def _homed_link() -> MotionLink:

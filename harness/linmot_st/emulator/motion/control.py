@@ -3,15 +3,14 @@
 It holds the main state machine (driven by the control word; state_machine.py), the motion command
 interpreter (driven by the motion command image that the PDOs fill; interpreter.py), the setpoint generator in
 use, the axis, the monitors (following error, position limits, in target position) and the outputs
-(status.py); quiet cycles run in the fast path (fast_path.py). This module holds the state, the inputs and
-the cycle. Sans-I/O like the drive: events come in with their time
-(`set_control_word`, `command_image`), and the cycle runs from `on_timer` at `next_timer_ns()`, once per MC cycle
-while anything moves and not at all while the axis rests. The drive reads the outputs (status word, state var,
-logged error, warn word, positions) after each call and publishes them in its TxPDOs and variables.
+(status.py); quiet cycles run in the fast path (fast_path.py). This module holds the state, the inputs and the
+cycle. Sans-I/O like the drive: events come in with their time (`set_control_word`, `command_image`), and the
+cycle runs from `on_timer` at `next_timer_ns()`, once per MC cycle while anything moves and not at all while
+the axis rests. The drive reads the outputs (status word, state var, logged error, warn word, positions) after
+each call and publishes them in its TxPDOs and variables.
 
 Every behaviour that no source states is marked INFERRED here and listed in docs/emulator.md section 13.
 """
-
 
 from __future__ import annotations
 
