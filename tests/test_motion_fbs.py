@@ -20,8 +20,8 @@ from stbench import VECTORS  # noqa: E402
 
 from linmot_st.bus import Frame  # noqa: E402
 from linmot_st.emulator import Curve, build_entry  # noqa: E402
-from linmot_st.emulator.motion import commands as C  # noqa: E402
-from linmot_st.errors import BY_NAME  # noqa: E402
+from linmot_st.protocol import commands as C  # noqa: E402
+from linmot_st.protocol.errors import BY_NAME  # noqa: E402
 from linmot_st.pvl import load_pvl  # noqa: E402
 
 E = {name: e.value for name, e in BY_NAME.items()}
