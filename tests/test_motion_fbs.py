@@ -530,6 +530,26 @@ def test_sync_mode_with_the_librarys_sync_producer():
     assert b["MO1.VALID"]
 
 
+def test_sync_every_nth_sync():
+    """SyncEvery n: transmission type n (1800h/1801h sub 2), the TxPDOs every n-th SYNC (CiA 301); 0 is refused
+    before any frame (InvalidMode)."""
+    b = MotionBench(nodes=1, pdo={"PDOTIMEOUT": 50 * MS})
+    t0 = b.plc.time_ns
+    r = b.fb("SETUP").run(MODE="LM_PDO_SYNC", EVENTTIMERMS=0, SYNCEVERY=0)
+    assert r.error and r.error_id == E["InvalidMode"], r
+    assert not [e for e in b.bus.trace if e.start_ns >= t0 and e.frame.can_id in (0x000, 0x601)]
+    b["SYNC.PERIOD"] = 2 * MS
+    b["SYNC.ENABLE"] = True
+    r = b.fb("SETUP").run(MODE="LM_PDO_SYNC", EVENTTIMERMS=0, SYNCEVERY=3)
+    assert r.done, r
+    assert [c.ttype for c in b.drive.pdo.tx][:2] == [3, 3]
+    t0 = b.plc.time_ns
+    b.step(300)
+    tx1 = [e for e in b.bus.trace if e.frame.can_id == 0x181 and e.start_ns >= t0]
+    syncs = [e for e in b.bus.trace if e.frame.can_id == 0x080 and e.start_ns >= t0]
+    assert abs(len(tx1) - len(syncs) / 3) <= 1 and b["MO1.VALID"]
+
+
 # ---------------------------------------------------------------- both backends, the same frames
 def frames_of_a_sequence(backend: str) -> list[tuple[int, int, bytes]]:
     b = MotionBench(nodes=1, backend=backend).ready()

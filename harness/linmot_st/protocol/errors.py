@@ -125,6 +125,7 @@ ERRORS: tuple[ErrorDef, ...] = (
     ErrorDef("ScaleRange", 0x0144, "motion: curve time scale outside 0..200 % or amplitude scale outside -2000..2000 %"),
     ErrorDef("InvalidCurveTime", 0x0145, "motion: curve time zero, negative or above 21474 s"),
     ErrorDef("InvalidMode", 0x0146, "motion: the Mode or Command input names no known variant"),
+    ErrorDef("InvalidBusBudget", 0x0147, "process-data budget: Axes below 1, or a Bitrate that is not a multiple of 1000"),
     # 07xx motion (st_lib/motion): the axis, the process data, the command handshake
     ErrorDef("AxisNotEnabled", 0x0701, "the axis is not in Operation Enabled (state 8): power it with FB_LmPower first"),
     ErrorDef("AxisNotHomed", 0x0702, "the move needs the axis homed (FB_LmHome, or a master homing)"),
