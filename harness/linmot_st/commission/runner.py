@@ -346,10 +346,11 @@ def run_timeout_s(datasets, nodes: list[int], opts: RunOptions) -> float:
     return slowest + 4 * exchanges * 2 * max_bus_bits(8) / opts.bitrate
 
 
-def make_drive(node_id: int, opts: RunOptions):
+def make_drive(node_id: int, opts: RunOptions, motion=None):
+    """An emulated drive for this run; `motion`: its MotionSettings (the motion job places the mechanics)."""
     from linmot_st.emulator import DriveTimings, E1100Drive
     timings = DriveTimings.fast() if opts.timing_kind() == "fast" else DriveTimings()
-    return E1100Drive(node_id, timings=timings)
+    return E1100Drive(node_id, timings=timings, motion=motion)
 
 
 def run(pvl, opts: RunOptions, build_result, *, dataset=None, datasets=None, progress=None,
