@@ -280,8 +280,12 @@ def test_real_time_cosim_step_paces_scans():
         sim = RealTimeCoSim(plc, bus, mailbox=MB)
         t0 = time.monotonic()
         sim.step(11)
+        # paced: 11 scans never take less than their 10 tick intervals, however loaded the machine
         assert time.monotonic() - t0 >= 0.049
-        assert sim.scans == 11 and plc.time_ns == 55_000_000
+        # a loaded machine starts a scan a tick or more late now and then (seen: 60 and 75 ms of PLC time
+        # under two CPU hogs): the PLC's clock then moves on by the ticks missed, counted; scans are never lost
+        assert sim.scans == 11 and plc.time_ns == 55_000_000 + sim.skipped_ticks * 5_000_000
+        assert sim.skipped_ticks == 0 or sim.overruns >= 1
 
 
 def test_real_time_cosim_step_one_in_a_loop_keeps_real_time():
