@@ -347,11 +347,12 @@ def run_timeout_s(datasets, nodes: list[int], opts: RunOptions) -> float:
     return slowest + 4 * exchanges * 2 * max_bus_bits(8) / opts.bitrate
 
 
-def emulated_drive(node_id: int, opts: RunOptions):
+def emulated_drive(node_id: int, opts: RunOptions, motion=None):
+    """An emulated drive for this run; `motion`: its MotionSettings (the motion job places the mechanics)."""
     from linmot_st.emulator import DriveTimings
     from linmot_st.emulator.models import make_drive
     timings = DriveTimings.fast() if opts.timing_kind() == "fast" else DriveTimings()
-    return make_drive(opts.drive_model, node_id, timings=timings)
+    return make_drive(opts.drive_model, node_id, timings=timings, motion=motion)
 
 
 def run(pvl, opts: RunOptions, build_result, *, dataset=None, datasets=None, progress=None,

@@ -75,6 +75,12 @@ def run_command(args: argparse.Namespace) -> int:
         print(f"linmot-st motion: refused: {e}", file=err)
         return 1
     plan = make_plan(prep.pvl, args.position)
+    if plan.refusals:
+        # before any motion (and before commissioning): the file's own settings exclude a step
+        print(f"motion job: REFUSED before motion: {plan.stroke.describe()}")
+        for why in plan.refusals:
+            print(f"  {why}")
+        return 1
     if not args.quiet:
         print(f"built {prep.rel} with {prep.build.backend} "
               f"({'cached' if prep.build.cached else f'{prep.build_s:.1f} s'}); commissioning, then moving "
