@@ -124,7 +124,7 @@ def _vai(mc, c: CommandDef, f: dict, t: int) -> bool:
         return True
     pos, vmax, acc, dec = _vai_values(mc, c, f)
     if c.start is Start.AFTER_ACTUAL_COMMAND:
-        mc.pending.queue(pos, vmax, acc, dec, t if mc.gen.done(t) else None)
+        mc.pending.queue(pos, vmax, acc, dec)
         mc._wake(t)
         return True
     if "max_current" in f:

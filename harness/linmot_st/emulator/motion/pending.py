@@ -4,9 +4,9 @@ Parameters On Positive/Negative Position Transition". A part of MotionControl (c
 every MC cycle while anything is armed (the cycle keeps running and the fast path steps aside), and status word
 bit 8 / state var bit 4 show the handler active.
 
-- The queued motion starts in the MC cycle after the one whose status word first shows Motion Active 0 ([MC]
-  4.3.134/144: the handler starts it "as soon as" bit 13 is 0, then switches itself off: one shot); it starts
-  from the demand position, at rest.
+- The queued motion starts in the first MC cycle after a status word showed Motion Active 0 ([MC] 4.3.134/144:
+  the handler starts it "as soon as" bit 13 is 0, then switches itself off: one shot); it starts from the
+  demand position, at rest.
 - A transition fires in the first cycle whose demand position has passed the transition position in its
   direction: the running VA motion continues to its target with the new vmax/acc/dec (one shot, INFERRED). A
   transition while no VA motion runs fires without effect (INFERRED).
@@ -27,7 +27,6 @@ class _Queued:
     vmax: float
     acc: float
     dec: float
-    idle_since: int | None = None      # the cycle that showed Motion Active 0
 
 
 @dataclass
@@ -52,9 +51,8 @@ class PendingMotions:
     def clear(self) -> None:
         self.queued = self.transition = None
 
-    def queue(self, target: float, vmax: float, acc: float, dec: float, idle_since: int | None) -> None:
-        """`idle_since`: the time of the command when no motion runs then (its status shows Motion Active 0)."""
-        self.queued = _Queued(float(target), vmax, acc, dec, idle_since)
+    def queue(self, target: float, vmax: float, acc: float, dec: float) -> None:
+        self.queued = _Queued(float(target), vmax, acc, dec)
 
     def arm_transition(self, position: float, upwards: bool, vmax: float, acc: float, dec: float,
                        demand: float) -> None:
@@ -75,9 +73,7 @@ class PendingMotions:
                 if isinstance(mc.gen, VaPlan) and mc.gen.kind == "vai" and not mc.gen.done(t):
                     mc._vai(t, p, mc.dem_v, mc.gen.target, tr.vmax, tr.acc, tr.dec)
         q = self.queued
-        if q is not None:
-            if q.idle_since is not None and t > q.idle_since:
-                self.queued = None
-                mc._vai(t, mc.dem_p, 0.0, q.target, q.vmax, q.acc, q.dec)
-            elif q.idle_since is None and mc.gen.done(t):
-                q.idle_since = t
+        # the status word last shown (the previous cycle's or event's: this cycle's is not made yet)
+        if q is not None and not mc.words[0] & W.SW_MOTION_ACTIVE:
+            self.queued = None
+            mc._vai(t, mc.dem_p, 0.0, q.target, q.vmax, q.acc, q.dec)
