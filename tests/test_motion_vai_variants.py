@@ -180,7 +180,8 @@ def test_from_act_pos_variants_start_from_the_actual_position():
         (0x093, dict(target=500, vmax=100, acc=10, dec=10)), (0x094, dict(target=500, vmax=100, acc=10, dec=10)),
         (0x0A3, dict(target=500)), (0x0A4, dict(target=500)),
         (0x0B3, dict(target=50 * MM, vmax=100_000)), (0x0B4, dict(target=50 * MM, vmax=100_000)),
-        (0x0C3, dict(target=50 * MM, vmax=100_000, acc=100_000)), (0x0C4, dict(target=50 * MM, vmax=100_000, acc=100_000)),
+        (0x0C3, dict(target=50 * MM, vmax=100_000, acc=100_000)),
+        (0x0C4, dict(target=50 * MM, vmax=100_000, acc=100_000)),
         (0x023, dict(target=50 * MM)), (0x024, dict(target=50 * MM)),
         (0x095, dict(target=300, vmax=100, acc=10, dec=10)), (0x096, dict(target=300, vmax=100, acc=10, dec=10)),
     ]

@@ -8,8 +8,9 @@ from __future__ import annotations
 from typing import Callable
 
 from ...protocol.commands import CommandDef, Kind, Target
-from ...protocol.upids import P_ACTIVE_CONTROLLER_SET, P_MAX_CURRENT_SET_A, P_MAX_CURRENT_SET_B, P_SCALE_POS, \
-    P_SCALE_VEL
+from ...protocol.upids import (
+    P_ACTIVE_CONTROLLER_SET, P_MAX_CURRENT_SET_A, P_MAX_CURRENT_SET_B, P_SCALE_POS, P_SCALE_VEL,
+)
 from .units import ACC_RAW, VEL_RAW
 from .velocity_plan import VelocityPlan
 
@@ -90,7 +91,6 @@ def apply_current_limit(mc) -> None:
 def select_controller_set(mc, c: CommandDef, f: dict, t: int) -> bool:
     """005xh: 1393h := 0 (set A) or 1 (set B); other values are ignored (INFERRED)."""
     if f["controller_set"] in (0, 1) and P_ACTIVE_CONTROLLER_SET in mc.params:
-        mc.sync(t)
         mc.params[P_ACTIVE_CONTROLLER_SET].ram = f["controller_set"]
         apply_current_limit(mc)
     return True

@@ -58,7 +58,8 @@ _BOTH = frozenset({E1100, B1100})
 _TRANSITION32 = (Field("position", "DINT", "0.1 um"), Field("vmax", "UDINT", "1E-6 m/s"),
                  Field("acc", "UDINT", "1E-5 m/s^2"), Field("dec", "UDINT", "1E-5 m/s^2"))
 _TRANSITION16 = (Field("position", "INT", "16-bit position scaling"),
-                 Field("vmax", "UINT", "16-bit velocity scaling"), Field("acc", "UINT", "16-bit acceleration scaling"), Field("dec", "UINT", "16-bit acceleration scaling"))
+                 Field("vmax", "UINT", "16-bit velocity scaling"), Field("acc", "UINT", "16-bit acceleration scaling"),
+                 Field("dec", "UINT", "16-bit acceleration scaling"))
 _P16 = (Field("target", "INT", "16-bit position scaling"),)
 _PA = (Field("target", "DINT", "0.1 um"), Field("vmax", "UDINT", "1E-6 m/s"))
 _DA = (Field("target", "DINT", "0.1 um"), Field("vmax", "UDINT", "1E-6 m/s"), Field("acc", "UDINT", "1E-5 m/s^2"))
