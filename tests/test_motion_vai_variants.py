@@ -257,6 +257,25 @@ def test_a_stop_ends_the_running_motion_so_the_queued_one_starts_and_a_newer_que
     assert mc.dem_p == 30 * MM and not mc.pending.armed
 
 
+def test_with_the_setting_a_stop_drops_the_queued_move():
+    from linmot_st.emulator.motion import MotionSettings
+
+    values = {0x1194: 2, 0x146F: 280 * MM, 0x146E: -10 * MM, 0x2041: 2}
+    d = E1100Drive(1, load_profile().with_defaults(values), timings=DriveTimings.fast(),
+                   motion=MotionSettings(stop_drops_pending=True))
+    link = MotionLink(d)
+    link.enable()
+    link.home()
+    run(link, 0x0C0, target=50 * MM, vmax=500_000, acc=500_000, dt_ns=MS)
+    link.advance(20 * MS)
+    run(link, 0x0C8, target=30 * MM, vmax=500_000, acc=500_000)
+    run(link, C.VAI_STOP, dt_ns=MS, dec=1_000_000)
+    link.advance(2 * MS)
+    assert not d.mc.pending.armed and not d.mc.status_word & W.SW_EVENT_HANDLER
+    link.advance(600 * MS)
+    assert d.mc.dem_p < 30 * MM and d.mc.in_target                   # stopped where the ramp ended
+
+
 def test_a_queue_is_dropped_when_the_drive_leaves_operation_enabled():
     link = homed_link()
     mc = link.drive.mc

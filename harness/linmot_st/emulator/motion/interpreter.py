@@ -119,6 +119,8 @@ def _vai(mc, c: CommandDef, f: dict, t: int) -> bool:
     p, v, _ = mc.gen.at(t)
     if c.target is Target.STOP:
         mc._start(StopPlan(t, p, v, _stop_deceleration(mc, c, f)))
+        if mc.s.stop_drops_pending:
+            mc.pending.clear()
         return True
     if VV.no_position(mc, c, f, t, _vai_values):
         return True
