@@ -113,6 +113,7 @@ class E1100Drive(NmtSlave):
         self.mc = MotionControl(self.motion, self.timings.hw_test_ns, self.params, self.curves, self.ct,
                                 self._log_error)
         self.params.live = self.mc.variable
+        self.mc.on_reset = lambda t: self._at(t, self._start_boot)     # 00Fxh: the whole firmware restarts
         self.pdo = ProcessData(self)
         self.mc_phase = "stopped"          # stopped | starting | running | stopping
         self.comm = CommObjects(node_id, self.profile.identity, self._heartbeat_power_on_ms,

@@ -27,6 +27,7 @@ from .axis import Axis
 from .ct_runner import CtRunner
 from .fast_path import FastPath
 from .interpreter import Interpreter
+from .pending import PendingMotions
 from .settings import MotionSettings
 from .setpoints import Hold
 from .state_machine import StateMachine
@@ -47,6 +48,8 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
         self.trajectory = Trajectory()
         self.executed: list[tuple[int, int, bytes]] = []   # (t_ns, header, parameters) of every command run
         self.ct_runner = CtRunner(self)
+        self.pending = PendingMotions()           # the queued motion and position transition (pending.py)
+        self.on_reset: Callable[[int], None] | None = None   # 00Fxh: the drive restarts (set by the drive)
         self.running = False
         self.power_on_reset()
         self._reset_state()
@@ -84,6 +87,9 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
         self._prev_vd = 0.0
         self._now = getattr(self, "_now", 0)
         self.ct_runner.stop()
+        self.pending.clear()
+        self.current_limited = False             # a With Max Curr command ran: the axis limits its current
+        self.axis.current_limit_ma = None
 
     # ------------------------------------------------------------------ parameters
     def par(self, upid: int, default: int = 0) -> int:
@@ -254,6 +260,8 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
             self._prev_vd = 0.0
         self.dem_p, self.dem_v = p, v
         self._last_tick = t
+        if self.pending.armed:
+            self.pending.step(self, t)
         if self.running:
             if self.controlled:
                 self._monitor(t)
@@ -269,7 +277,7 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
                     self._power_off(t, W.SWITCH_ON_DISABLED)
         # keep cycling while anything can still change
         self._update_in_target(t)
-        busy = (not self.gen.done(t) or self.ct_runner.running or axis.blocked
+        busy = (not self.gen.done(t) or self.ct_runner.running or axis.blocked or self.pending.armed
                 or (self.state in W.SPECIAL_STATES and self.sub != W.SUB_FINISHED)
                 or (self._in_window_since is not None and not self.in_target))
         if self.controlled:

@@ -76,6 +76,8 @@ class StatusWords:
             bits |= W.SW_WARNING
         if s in W.SPECIAL_STATES and self.sub != W.SUB_FINISHED:
             bits |= W.SW_SPECIAL_MOTION
+        if self.pending.armed:
+            bits |= W.SW_EVENT_HANDLER
         if self.in_target:
             bits |= W.SW_IN_TARGET
         if self.homed:
@@ -112,6 +114,8 @@ class StatusWords:
                 low |= W.SV_IN_TARGET
             if self.homed:
                 low |= W.SV_HOMED
+            if self.pending.armed:
+                low |= W.SV_EVENT_HANDLER
         elif s in W.SPECIAL_STATES:
             low = self.sub
         else:
