@@ -44,7 +44,8 @@ class MatiecBackend:
     def flags(self) -> list[str]:
         return list(iec2c.flags(self._tool().iec2c)) + unit_flags()
 
-    def generate(self, src: Sources, c_dir: Path, version: str) -> Generated:
+    def generate(self, src: Sources, c_dir: Path, version: str, coverage: bool = False) -> Generated:
+        # coverage needs nothing more of iec2c: its C has `#line` directives already (flags(): `-O l`)
         tool = self._tool()
         try:
             manifest, units, plain_units = layout.generate(tool, src, c_dir, version)
