@@ -1,9 +1,10 @@
 """The coverage builds loaded in this process, and their counters written into a session folder.
 
 A coverage build (toolchain.build(coverage=True)) links libgcov, whose counters live in the library:
-each private copy a Plc loads (plc/runtime.py) has its own. `dump(folder)` makes each write its
-counters out and zero them; libgcov adds them to the .gcda file already there, so the instances of one
-build, several dumps and several processes (pytest-xdist workers) sum up. The .gcda of a build goes to
+each private copy a Plc loads (plc/runtime.py) has its own. `dump(folder)` makes each library loaded
+since the last dump write its counters out, once (what it runs afterwards is not counted); libgcov adds
+them to the .gcda file already there, so the instances of one build and several processes (pytest-xdist
+workers) sum up. The .gcda of a build goes to
 `folder/<entry name>/`, beside a copy of the build's .gcno files, which is what gcov reads.
 """
 
@@ -41,12 +42,14 @@ def loaded_entries() -> list[Path]:
 
 
 def dump(folder: Path) -> list[Path]:
-    """Write the counters of every loaded coverage build into `folder` (merged with what is there) and
-    zero them. Returns the build folders under `folder` that received data."""
+    """Write the counters of every coverage build loaded since the last dump into `folder` (added to what
+    is there). Returns the build folders under `folder` that received data."""
     folder = Path(folder)
     out: set[Path] = set()
     with _lock:
-        for lib, entry in _loaded:
+        todo = list(_loaded)
+        _loaded.clear()
+        for lib, entry in todo:
             record = json.loads((entry / COVERAGE_RECORD).read_text())
             objdir = Path(record["objdir"])
             target = folder / entry.name

@@ -51,6 +51,7 @@ TRACEBACK_ENV = "LINMOT_ST_TRACEBACK"
 # builds, so that every PLC a test loads counts (docs/coverage.md)
 COVERAGE_ENV = "LINMOT_ST_COVERAGE"
 COVERAGE_RECORD = "coverage.json"     # in a coverage build's entry: where gcc put its objects (the .gcda paths)
+COVERAGE_FORMAT = "gcov-2"            # of the coverage builds (their flags and record): part of their cache key
 FAILED_KEPT = 5     # failed builds whose generated C is kept for reading (build/cache/failed-<key>)
 
 
@@ -109,7 +110,8 @@ def build(path: str | os.PathLike, backend: str = "auto", out: str | os.PathLike
         compiler = cc.find_compiler()
     except cc.CCompileError as exc:
         raise CompileError([f"error: {exc}"], chosen.name) from None
-    extra_key = {"coverage": True} if coverage else {}      # the keys of plain builds stay what they were
+    # the keys of plain builds stay what they were; a coverage build's also name its record's format
+    extra_key = {"coverage": COVERAGE_FORMAT} if coverage else {}
     key = _cache.make_key({
         **extra_key,
         "backend": chosen.name,
@@ -177,8 +179,10 @@ def _compile(chosen: Backend, src: _sources.Sources, store: _cache.Cache, key: s
             unit_flags = {u: gen.unit_flags.get(u, []) + cc.COVERAGE_FLAGS for u in all_units}
             all_units = [*all_units, cc.COVERAGE_GLUE]
             link_flags = cc.COVERAGE_LINK_FLAGS
-            (staging / COVERAGE_RECORD).write_text(json.dumps({"objdir": str(staging), "backend": chosen.name,
-                                                               "root": str(src.root)}))
+            # the ST files by absolute path: the C names an included file as its include path
+            (staging / COVERAGE_RECORD).write_text(json.dumps({
+                "objdir": str(staging), "backend": chosen.name, "root": str(src.root),
+                "sources": [str(Path(p).resolve()) for p in gen.sources_read]}))
         (staging / _cache.MANIFEST_NAME).write_text(json.dumps(manifest, indent=1))
         generated_s = time.perf_counter() - t0
         loud = generated_s > PROGRESS_AFTER_S
