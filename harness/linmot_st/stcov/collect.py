@@ -21,6 +21,7 @@ DUMP_SYMBOL = "plc_coverage_dump"       # toolchain/glue/plc_coverage.c
 
 _loaded: list[tuple[object, Path]] = []   # (the library's ctypes handle, its build entry)
 _lock = threading.Lock()
+lost: list[Path] = []                     # builds whose counters could not be written (their folder went)
 
 
 def is_coverage_build(entry: Path) -> bool:
@@ -50,10 +51,16 @@ def dump(folder: Path) -> list[Path]:
         todo = list(_loaded)
         _loaded.clear()
         for lib, entry in todo:
-            record = json.loads((entry / COVERAGE_RECORD).read_text())
+            try:
+                record = json.loads((entry / COVERAGE_RECORD).read_text())
+                target = folder / entry.name
+                _place_notes(entry, target)
+            except (OSError, ValueError):
+                # the build's folder is gone (a test's temporary cache): without its .gcno the counts
+                # cannot be read, so they are not written
+                lost.append(entry)
+                continue
             objdir = Path(record["objdir"])
-            target = folder / entry.name
-            _place_notes(entry, target)
             # libgcov writes <objdir>/<unit>.gcda; GCOV_PREFIX_STRIP drops the objdir's components and
             # GCOV_PREFIX puts the file under target (read at each dump, so set per build)
             saved = {k: os.environ.get(k) for k in ("GCOV_PREFIX", "GCOV_PREFIX_STRIP")}
