@@ -181,3 +181,44 @@ def test_pytest_option_end_to_end(pytester):
                                  "*FUNCTION_BLOCK FB_Pick * 3/4 * 2/3 *", "*PROGRAM Main * 5/7 * 3/5 *",
                                  "TOTAL * 8/11 *", "cobertura: *coverage.xml"])
     assert (pytester.path / "build" / "st-coverage" / "html" / "index.html").is_file()
+
+
+# The C iec2c writes for MAIN's body with `-O l` (the shape of generate_c_st.cc: a directive per statement
+# of a statement list, none for `} else if`), FB call on two C lines
+MATIEC_C = """\
+void MAIN_body__(MAIN *data__) {
+#line 25 "prog.st"
+  if (__GET_VAR(data__->A,)) {
+#line 26 "prog.st"
+    __SET_VAR(data__->,N,,(__GET_VAR(data__->N,) + 1));
+  } else if (__GET_VAR(data__->B,)) {
+#line 28 "prog.st"
+    __SET_VAR(data__->,N,,(__GET_VAR(data__->N,) + 2));
+  }
+#line 33 "prog.st"
+  __SET_VAR(data__->CHOOSER.,MODE,,__GET_VAR(data__->N,));
+  FB_PICK_body__(&data__->CHOOSER);
+  goto __end;
+}
+"""
+
+
+def test_matiec_line_directives_made_exact(tmp_path):
+    from linmot_st.toolchain.matiec import line_map
+    src = write_st(PROGRAM, tmp_path)
+    assert line_map.elsif_lines(src) == [27]
+    out = line_map.exact_lines(MATIEC_C, line_map.elsif_table(tmp_path, [src]), "POUS.c").split("\n")
+    at = {line.strip(): out[k - 1] for k, line in enumerate(out) if not line.startswith("#")}
+    assert at["} else if (__GET_VAR(data__->B,)) {"] == '#line 27 "prog.st"'          # the ELSIF's own line
+    assert at["FB_PICK_body__(&data__->CHOOSER);"] == '#line 33 "prog.st"'           # not 34
+    assert at["goto __end;"] == '#line 33 "prog.st"'
+    # after the function: the C file's own numbering (the directive numbers the line after it)
+    assert out[-2] == f'#line {len(out)} "POUS.c"' and out[-3] == "}"
+    # a directive only where a statement starts: never inside a call spread over lines
+    multi = '#line 5 "prog.st"\n  F(a,\n    b);\n  x = 1;\n'
+    macro = '#line 5 "prog.st"\n  x = 1;\n#define M(a) \\\n  f(a); \\\n  g(a);\n  y = 2;\n'
+    assert line_map.exact_lines(macro, lambda name: [], "POUS.c").split("\n") == [
+        '#line 5 "prog.st"', "  x = 1;", "#define M(a) \\", "  f(a); \\", "  g(a);", '#line 5 "prog.st"',
+        "  y = 2;", ""]
+    assert line_map.exact_lines(multi, lambda name: [], "POUS.c").split("\n") == [
+        '#line 5 "prog.st"', "  F(a,", "    b);", '#line 5 "prog.st"', "  x = 1;", ""]

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from linmot_st.toolchain.builtin import ast as A
+from linmot_st.toolchain.matiec.line_map import decisions
 
 
 @dataclass(frozen=True)
@@ -92,29 +93,19 @@ def _first_line(body: list[A.Node]) -> int | None:
 
 
 def _walk(stmts: list[A.Node], pou: str, out: list[Decision]) -> None:
-    for s in stmts:
+    for s in decisions(stmts):
         if isinstance(s, A.If):
             arms = [Arm("THEN" if k == 0 else "ELSIF", _first_line(body)) for k, (_, body) in enumerate(s.branches)]
-            arms.append(Arm("ELSE", _first_line(s.else_body)) if s.else_body is not None
-                        else Arm("ELSE (none written)", None))
-            out.append(Decision("IF", s.pos.line, pou, tuple(arms)))
-            for _, body in s.branches:
-                _walk(body, pou, out)
-            _walk(s.else_body or [], pou, out)
-        elif isinstance(s, A.Case):
+        else:
             arms = [Arm("CASE " + ", ".join(_label(lab) for lab in labels), _first_line(body))
                     for labels, body in s.elements]
-            arms.append(Arm("ELSE", _first_line(s.else_body)) if s.else_body is not None
-                        else Arm("ELSE (none written)", None))
-            out.append(Decision("CASE", s.pos.line, pou, tuple(arms)))
-            for _, body in s.elements:
-                _walk(body, pou, out)
-            _walk(s.else_body or [], pou, out)
-        elif isinstance(s, (A.For, A.While, A.Repeat)):
-            _walk(s.body, pou, out)
+        arms.append(Arm("ELSE", _first_line(s.else_body)) if s.else_body is not None
+                    else Arm("ELSE (none written)", None))
+        out.append(Decision("IF" if isinstance(s, A.If) else "CASE", s.pos.line, pou, tuple(arms)))
 
 
 def _label(lab: A.CaseLabel) -> str:
     def text(n: A.Node) -> str:
         return str(getattr(n, "value", None) if getattr(n, "value", None) is not None else getattr(n, "name", "?"))
     return text(lab.lo) + (f"..{text(lab.hi)}" if lab.hi is not None else "")
+
