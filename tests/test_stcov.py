@@ -169,11 +169,12 @@ def test_runs(plc):
 '''
 
 
-def test_pytest_option_end_to_end(pytester):
+@pytest.mark.parametrize("workers", [[], ["-n", "2"]], ids=["one process", "xdist"])
+def test_pytest_option_end_to_end(pytester, workers):
     pytester.makefile(".st", prog=PROGRAM)
     pytester.makepyfile(test_prog=textwrap.dedent(PROJECT_TEST))
     pytester.makeini("[pytest]\nlinmot_st_entry = prog.st\nlinmot_st_backend = builtin\n")
-    result = pytester.runpytest_subprocess("--linmot-cov", "-p", "no:cacheprovider")
+    result = pytester.runpytest_subprocess("--linmot-cov", "-p", "no:cacheprovider", *workers)
     result.assert_outcomes(passed=1)
     # 3 scans: the THEN once, the ELSIF tested twice and never taken (line 28 not run), N > 100 never;
     # CASE: 0 (ELSE) twice, 1 once, 2/3 never (line 12). Arms: 2 of 3, 1 of 2, 2 of 3
