@@ -303,3 +303,34 @@ def test_inputs_are_readable_and_recorded():
         io.set_input("X4.6", 1, link.t - MS)                   # the past cannot change
     with pytest.raises(KeyError):
         io.set_input("X9.1", 1)
+
+
+# ---------------------------------------------------------------- every row of this part of issue 20 is accepted
+from linmot_st.protocol.commands.triggered import TRIGGERED  # noqa: E402
+
+ROWS = sorted(set(TRIGGERED) | {C.WRITE_X4_OUTPUTS, C.WRITE_X6_OUTPUTS, C.CLEAR_EVENT_EVALUATION,
+                                C.VAI_GO_TO_ANALOG_POS, C.VAI_INCREMENT_CAPTURED_POS, C.VAI_START_TRIG_RISE_CONFIG,
+                                C.VAI_START_TRIG_FALL_CONFIG, C.WAIT_RISING_TRIGGER, C.WAIT_FALLING_TRIGGER})
+SMALL = {"target": 10, "vmax": 100, "acc": 100, "dec": 100, "curve_id": 1, "offset": 0, "curve_time": 100_000,
+         "amplitude": 1000, "entry": 1, "mask": 1, "value": 1}
+
+
+@pytest.mark.parametrize("cid", ROWS, ids=lambda c: f"{c:03X}h")
+def test_every_row_is_accepted(cid):
+    """Sent as the catalogue's transport says: RxPDO2 + RxPDO3 (2041h = 2: parameter bytes 6..11) up to 12
+    bytes, a command-table entry started by 200xh beyond; the drive runs it without 0081h or any other error."""
+    row = C.COMMANDS[cid]
+    link = homed_link(**{"x2041": 2})
+    d = link.drive
+    d.ct.ram[1] = build_entry(C.NOP << 4, b"")
+    fields = {n: SMALL[n] for n in row.field_names}
+    if row.transport is C.Transport.COMMAND_TABLE:
+        d.ct.ram[9] = build_entry(cid << 4, C.encode(cid, 0, **fields)[2:])
+        link.command(C.START_COMMAND_TABLE, entry=9)
+    else:
+        link.command(cid, **fields)
+    link.advance(20 * MS)
+    assert d.mc.error_code == 0 and d.mc.state == W.OPERATION_ENABLED, f"{d.mc.error_code:04X}h"
+    assert d.mc.state_var & 0x0F == link.count                               # the count is echoed: executed
+    assert [h >> 4 for _, h, _ in d.mc.executed][-1] == cid
+    assert bool(d.mc.status_word & W.SW_EVENT_HANDLER) == (cid in TRIGGERED)
