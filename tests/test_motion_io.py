@@ -380,3 +380,17 @@ def test_triggered_moves_are_the_same_with_quiet_cycles():
     # each run starts in the first MC cycle after its (inhibited, then 3.5 ms delayed) edge
     edges = [c.t_ns for c in drive.mc.trajectory.io if c.name == "trigger" and c.value == 1]
     assert len(edges) == 7 and all(e < f <= e + CYCLE for e, f in zip(edges, drive.mc.events.fired))
+
+
+def test_x43_as_brake_output_follows_operation_enabled():
+    """[MC] 7.2.1.1: with brake mode 1717h the brake is released (X4.3 = 24 V) while Operation Enabled is set;
+    003xh does not drive it then."""
+    link = homed_link(**{"x1717": 1})
+    io = link.drive.io
+    assert io.output("X4.3") == 1
+    link.command(C.WRITE_X4_OUTPUTS, mask=0b11, value=0b10)
+    link.advance(2 * MS)
+    assert io.output("X4.3") == 1 and io.output("X4.4") == 1
+    link.cw(0x0037)                                              # enable operation off: state 6
+    link.advance(5 * MS)
+    assert link.drive.mc.state == W.READY_TO_OPERATE and io.output("X4.3") == 0 and io.outputs("X4") == 0b10
