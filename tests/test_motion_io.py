@@ -298,6 +298,9 @@ def test_inputs_are_readable_and_recorded():
     io.set_analog(2.5, link.t + 2 * MS)
     link.advance(5 * MS)
     assert io.input("X4.7") == 1 and io.analog() == 2.5
+    io.set_input("X6.2", 1)
+    link.advance(MS)
+    assert io.input_word("X6") == 0b100 and io.input_word() == 1 << 4 and io.outputs("X6") == 0
     assert link.drive.mc.variable(0x1DA0) == 1 << 4 and link.drive.mc.variable(0x1DA3) == 2500
     with pytest.raises(ValueError):
         io.set_input("X4.6", 1, link.t - MS)                   # the past cannot change

@@ -10,12 +10,13 @@ outputs ([MC] 7.2; seed 004 7.2). Sans-I/O like the drive: a level changes at a 
 Pins ([MC] 7.2 table): X4.3 brake / output, X4.4 analog in, X4.5 capture input, X4.6 trigger input, X4.7 home
 switch, X4.8 limit switch IN (negative), X4.9 limit switch OUT (positive), X4.10/X4.11 PTC, X4.12 SVE. Outputs
 X4.3..X4.11 are written by 003xh (bit 0 = X4.3, [MC] 4.3.4); X6.0..X6.15 by 004xh (seed 004 TOC; layout
-INFERRED as 003xh's).
+INFERRED as 003xh's). X6.0..X6.15 are also inputs (the IF commands compare "X6 inputs"; 16 bits INFERRED).
 
 The trigger input is conditioned as [MC] 7.2.2 says (mode 170Ch: none, direct, inhibited 170Dh/170Eh,
 delayed 170Fh/1710h, inhibited & delayed); the conditioned edges ("trigger out") go to the listeners (the MC's
 event handler). A rising edge on X4.5 captures the actual position (variable 1E62h; INFERRED edge).
-Every level change is recorded in `changes` (and the MC's trajectory record, trajectory.io).
+Every level change is recorded in `changes`: on a drive, the MC's trajectory record (`trajectory.io`,
+`trajectory.io_at(name, t_ns)`).
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ from ...protocol.upids import (
 X4_INPUTS = tuple(f"X4.{n}" for n in range(3, 13))       # any X4 pin can be read (general purpose IO)
 X4_OUTPUTS = tuple(f"X4.{n}" for n in range(3, 12))      # 003xh: bit 0 = X4.3 .. bit 8 = X4.11
 X6_OUTPUTS = tuple(f"X6.{n}" for n in range(16))         # 004xh: bit n = X6.n (INFERRED)
+X6_INPUTS = X6_OUTPUTS                                   # the X6 inputs the IF commands read (INFERRED: 16 bits)
 TRIGGER, CAPTURE, ANALOG = "X4.6", "X4.5", "X4.4"
 LIMIT_IN, LIMIT_OUT = "X4.8", "X4.9"
 
@@ -68,7 +70,7 @@ class DriveIO:
     def __init__(self, settings: IoSettings | None = None, par: Callable[[int, int], int] | None = None):
         self.s = settings or IoSettings()
         self.par = par or (lambda upid, default=0: default)
-        self.levels: dict[str, int] = {n: 0 for n in X4_INPUTS}
+        self.levels: dict[str, int] = {n: 0 for n in X4_INPUTS + X6_INPUTS}
         self.out_x4 = 0                  # output bits, bit 0 = X4.3
         self.out_x6 = 0
         self.analog_v = 0.0
@@ -93,7 +95,7 @@ class DriveIO:
     # ------------------------------------------------------------------ reading
     def input(self, name: str) -> int:
         """The level (0/1) of a digital input now (as of the last event the drive processed)."""
-        return self.levels[_pin(name, X4_INPUTS)]
+        return self.levels[_pin(name, X4_INPUTS + X6_INPUTS)]
 
     def analog(self) -> float:
         """The voltage on X4.4."""
@@ -119,24 +121,16 @@ class DriveIO:
         brake = self.brake()
         return self.out_x4 if brake is None else (self.out_x4 & ~1) | brake
 
-    def input_word(self) -> int:
-        """The X4 input levels as a word, bit 0 = X4.3 (the same bit numbering as the outputs)."""
-        return sum(self.levels[n] << i for i, n in enumerate(X4_INPUTS))
-
-    def level_at(self, name: str, t_ns: int) -> float | None:
-        """The value of a pin (or 'trigger', or 'X4.4' volts) at t_ns from the record of changes."""
-        found = None
-        for c in self.changes:
-            if c.t_ns > t_ns:
-                break
-            if c.name == name:
-                found = c.value
-        return found
+    def input_word(self, connector: str = "X4") -> int:
+        """The input levels of a connector as a word: X4 bit 0 = X4.3 (the outputs' numbering), X6 bit n = X6.n
+        (what the command table's masked IF commands compare)."""
+        pins = {"X4": X4_INPUTS, "X6": X6_INPUTS}[connector]
+        return sum(self.levels[n] << i for i, n in enumerate(pins))
 
     # ------------------------------------------------------------------ writing (tests, rig, CLI)
     def set_input(self, name: str, level: int, t_ns: int | None = None) -> None:
         """A digital input changes to `level` at t_ns (default: now); a time in the future is scheduled."""
-        pin = _pin(name, X4_INPUTS)
+        pin = _pin(name, X4_INPUTS + X6_INPUTS)
         if pin == ANALOG:
             raise ValueError("X4.4 is the analog input: use set_analog(volts, t_ns)")
         self._schedule(t_ns, lambda t: self._apply(pin, 1 if level else 0, t))
