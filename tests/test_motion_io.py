@@ -397,3 +397,28 @@ def test_x43_as_brake_output_follows_operation_enabled():
     link.cw(0x0037)                                              # enable operation off: state 6
     link.advance(5 * MS)
     assert link.drive.mc.state == W.READY_TO_OPERATE and io.output("X4.3") == 0 and io.outputs("X4") == 0b10
+
+
+def test_vai_go_to_analog_pos_can_follow_the_input():
+    """MotionSettings(analog_target_follows=True): the target follows X4.4 until another motion replaces it."""
+    from linmot_st.emulator.motion import MotionSettings
+
+    values = {0x1194: 2, 0x146F: 280 * MM, 0x146E: -10 * MM, 0x14DC: 0, 0x14DD: 200 * MM, **PREDEF}
+    d = E1100Drive(1, load_profile().with_defaults(values), timings=DriveTimings.fast(),
+                   motion=MotionSettings(analog_target_follows=True))
+    link = MotionLink(d)
+    link.enable()
+    link.home()
+    d.io.set_analog(1.0, link.t)
+    d.ct.ram[2] = build_entry(C.VAI_GO_TO_ANALOG_POS << 4,
+                              C.encode(C.VAI_GO_TO_ANALOG_POS, 0, vmax=500_000, acc=500_000, dec=500_000)[2:])
+    link.command(C.START_COMMAND_TABLE, entry=2)
+    link.advance(300 * MS)
+    assert abs(d.mc.axis.position - 20 * MM) < 10                            # 1 V: 20 mm
+    d.io.analog_ramp(link.t, link.t + 200 * MS, 1.0, 4.0, steps=20)
+    link.advance(600 * MS)
+    assert abs(d.mc.axis.position - 80 * MM) < 10                            # followed to 4 V: 80 mm
+    link.command(C.PREDEF_VAI_GO_TO_POS, target=10 * MM)                      # another motion ends following
+    d.io.set_analog(9.0, link.t + 10 * MS)
+    link.advance(600 * MS)
+    assert abs(d.mc.axis.position - 10 * MM) < 10 and d.mc.events.follow is None

@@ -236,6 +236,7 @@ class E1100Drive(NmtSlave):
         io.before_change = mc.sync
         io.on_trigger = mc.events.on_trigger
         io.on_capture = lambda t: int(round(mc.axis.position))
+        io.on_analog = lambda volts, t: mc.events.on_analog(t)
         io.on_level = mc.events.on_limit_switch if io.s.limit_switches else (lambda pin, level, t: None)
         # [MC] 7.2.1.1: with brake mode 1717h the brake is released (X4.3 = 24 V) while status word bit 0
         # (Operation Enabled) is set; the other brake modes (1716h, 1718h, delays) are not modelled

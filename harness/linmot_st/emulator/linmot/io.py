@@ -82,6 +82,7 @@ class DriveIO:
         self.on_trigger: Callable[[bool, int], None] = lambda rising, t: None
         self.on_capture: Callable[[int], int | None] = lambda t: None
         self.on_level: Callable[[str, int, int], None] = lambda name, level, t: None
+        self.on_analog: Callable[[float, int], None] = lambda volts, t: None
         # X4.3 as brake output ([MC] 7.2.1.1, 1717h): its level from the MC, None when X4.3 is no brake
         self.brake: Callable[[], int | None] = lambda: None
         self.captured_position = 0
@@ -216,6 +217,7 @@ class DriveIO:
         self.before_change(t)
         self.analog_v = volts
         self._record(t, ANALOG, volts)
+        self.on_analog(volts, t)
 
     def _time(self, upid: int) -> int:
         return self.par(upid, 0) * self.s.trigger_time_unit_ns
