@@ -142,14 +142,19 @@ def test_input_script_lines():
             apply_line(io, bad, 5_000_000_000)
 
 
-def test_the_rig_sets_and_reads_drive_inputs():
-    """The pytest plugin's rig (examples/user_project's station): an input set at a rig time changes then, in
-    step with the PLC's scans, and is recorded beside the drive's trajectory."""
+@pytest.fixture(scope="module")
+def station():
     from linmot_st import resources
-    from linmot_st.plctest import Rig
     from linmot_st.plctest.project import Project
 
-    station = Project(root=resources.CHECKOUT / "examples" / "user_project").build(backend="builtin")
+    return Project(root=resources.CHECKOUT / "examples" / "user_project").build(backend="builtin")
+
+
+def test_the_rig_sets_and_reads_drive_inputs(station):
+    """The pytest plugin's rig (examples/user_project's station): an input set at a rig time changes then, in
+    step with the PLC's scans, and is recorded beside the drive's trajectory."""
+    from linmot_st.plctest import Rig
+
     rig = Rig(station, timings="fast")
     rig.set_input("X4.6", 1, at_ms=5.5)
     rig.set_input("X4.4", 7.5, at_ms=8)
@@ -162,3 +167,14 @@ def test_the_rig_sets_and_reads_drive_inputs():
     rig.set_input("X4.6", 0)                                   # now
     rig.step(1)
     assert rig.io().input("X4.6") == 0
+
+
+def test_the_real_time_rig_sets_an_input_now(station):
+    from linmot_st.plctest import RealTimeRig
+
+    with RealTimeRig(station) as rig:
+        rig.step(5)
+        rig.set_input("X4.7", 1)
+        with pytest.raises(ValueError):
+            rig.set_input("X4.7", 0, at_ms=100)
+        assert _wait(lambda: rig.io().input("X4.7") == 1, 2.0)
