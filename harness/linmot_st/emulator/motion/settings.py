@@ -51,6 +51,10 @@ class MotionSettings:
     moving_mass_kg: float = 0.5
     force_constant_n_per_a: float = 10.0
 
+    # VAI Go To Analog Pos (019xh): False = the target is the analog input's position when the command runs;
+    # True = it follows X4.4 until another motion replaces it ([MC] 4.3.18 does not say which)
+    analog_target_follows: bool = False
+
     # the trajectory record (drive.mc.trajectory): one sample per MC cycle and per event
     record_trajectory: bool = True
 

@@ -34,6 +34,12 @@ class Kind(enum.Enum):
     VAI_16BIT_DEC_ACC = "VAI 16 bit dec=acc: target, vmax, acc=dec in the 16-bit interface scaling"
     SELECT_CONTROLLER_SET = "select the active position-controller set (A/B)"
     RESET = "restart the drive's firmware"
+    IO_OUTPUTS = "write interface outputs with a mask"
+    CLEAR_EVENTS = "clear the event handler"
+    ON_TRIGGER = "armed in the event handler, run on every trigger edge until 008xh"
+    VAI_CAPTURED = "VAI to the captured position plus an increment"
+    VAI_ANALOG = "VAI to the position the analog input X4.4 sets"
+    VAI_TRIG_CONFIG = "VAI with the Trig Rise / Trig Fall Config parameters"
 
 
 class Start(enum.Enum):
