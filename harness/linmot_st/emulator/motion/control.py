@@ -98,6 +98,7 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
         self._now = t
         self.running = True
         self._reset_state()
+        self.ct_runner.clear_variables()          # RAM of the MC: 0 at every MC start (INFERRED)
         self.axis.forget_reference()
         self.gen = Hold(self.axis.position)
         self.dem_p = self.axis.position

@@ -18,6 +18,7 @@ from ...protocol.upids import (
     P_CURVE_AMPLITUDE, P_CURVE_OFFSET, P_CURVE_TIME_SCALE, P_HOME_POSITION, P_PREDEF_ACC, P_PREDEF_DEC,
     P_PREDEF_VMAX, P_QUICK_STOP_DEC, P_SCALE_ACC, P_SCALE_POS, P_SCALE_VEL,
 )
+from . import ct_language
 from .setpoints import CurvePlan, StopPlan, VaPlan
 from .units import ACC_RAW, VEL_RAW
 
@@ -176,4 +177,8 @@ HANDLERS: dict[Kind, Handler] = {
     Kind.VAI_16BIT: _vai,
     Kind.PREDEF_VAI: _vai,
     Kind.TIME_CURVE: _time_curve,
+    Kind.CT_MODIFY: ct_language.modify_entry,
+    Kind.CT_VARIABLE: ct_language.variable,
+    Kind.CT_IF: ct_language.if_jump,
+    Kind.VAI_CT_VAR: ct_language.vai_to_variable,
 }

@@ -28,6 +28,10 @@ class Kind(enum.Enum):
     TIME_CURVE = "time curve from the curve RAM"
     COMMAND_TABLE = "command-table control"
     WAIT = "command-table wait (acts only inside a command-table sequence)"
+    CT_MODIFY = "modify a parameter of a command-table entry in RAM"
+    CT_VARIABLE = "set, add to, store or load a command-table variable"
+    CT_IF = "command-table IF: a two-way jump on a condition"
+    VAI_CT_VAR = "VAI to the position held in a command-table variable"
 
 
 class Start(enum.Enum):
