@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from linmot_st.emulator import DriveTimings, E1100Drive, build_entry, load_profile
-from linmot_st.emulator.motion import ct_language
+from linmot_st.emulator.motion import MotionSettings, ct_language
 from linmot_st.emulator.testing import MotionLink
 from linmot_st.protocol import commands as C
 from linmot_st.protocol import words as W
@@ -32,10 +32,10 @@ VAD = dict(vmax=250_000, acc=500_000, dec=500_000)
 PREDEF = {0x14BE: 250_000, 0x14BF: 500_000, 0x14C0: 500_000}
 
 
-def _link() -> MotionLink:
+def _link(**settings) -> MotionLink:
     # RxPDO3 mapping 2041h = 2: parameter bytes 6..11, so the 12-byte commands (0D4xh..0D7xh) fit
     profile = load_profile().with_defaults({0x1194: 2, 0x2041: 2, **PREDEF})
-    link = MotionLink(E1100Drive(1, profile, timings=DriveTimings.fast()))
+    link = MotionLink(E1100Drive(1, profile, timings=DriveTimings.fast(), motion=MotionSettings(**settings)))
     link.enable()
     link.home()
     link.advance(MS)
@@ -132,6 +132,18 @@ def test_a_command_from_the_interface_ends_the_sequence():
     assert not mc.ct_runner.running
     link.advance(2 * 1000 * MS)
     assert mc.ct_runner.variables[1] == 0 and mc.dem_p == 10 * MM
+
+
+def test_with_the_setting_off_the_sequence_goes_on_beside_the_interfaces_command():
+    link = _link(interface_command_ends_sequence=False)
+    mc = link.drive.mc
+    load(link.drive, {1: (C.WAIT_TIME, dict(time=1000), 2), 2: (C.SET_CT_VAR1, dict(value=7), END)})
+    link.command(C.START_COMMAND_TABLE, entry=1)
+    link.advance(10 * MS)
+    link.command(C.PREDEF_VAI_GO_TO_POS, target=10 * MM)
+    assert mc.ct_runner.running
+    link.advance(2 * 1000 * MS)
+    assert mc.ct_runner.variables[1] == 7 and mc.dem_p == 10 * MM and not mc.ct_runner.running
 
 
 # ---------------------------------------------------------------- the waits, one by one

@@ -157,7 +157,8 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
                 self._fail(W.ERR_MOTION_CMD_WRONG_STATE, t)     # seed 004 3.7: error, state 4
                 self._record(t)
             return      # INFERRED: in states 0..5 (and 14) a new count is taken but not executed
-        self.ct_runner.stop()   # a command from the interface ends a running command-table sequence
+        if self.s.interface_command_ends_sequence:
+            self.ct_runner.stop()   # a command from the interface ends a running command-table sequence
         self.execute(header, params, t)
         self._record(t)
 

@@ -42,6 +42,10 @@ class MotionSettings:
     # homed, else error 0080h ([MC] 10: "action that requires the motor to be already homed")
     motion_requires_homing: bool = True
 
+    # a motion command from the interface while a command-table sequence runs: ends the sequence (True), or runs
+    # and lets the sequence go on (False); no source says which (docs/emulator.md 13.6)
+    interface_command_ends_sequence: bool = True
+
     # demand current (1B93h, mA) = moving mass x actual acceleration / force constant
     moving_mass_kg: float = 0.5
     force_constant_n_per_a: float = 10.0
