@@ -7,8 +7,8 @@ velocities in 1E-6 m/s, current in mA (the demand current 1B93h: [MC] 4.3.185 ca
 masked IFs on the status and warn word as they are now. INFERRED (docs/emulator.md 13.6): "Greater/Less Than" are
 strict; "Unsigned" compares |difference|; the IFs' values are in the unit of the same signal's wait.
 
-A wait or IF of another group (the trigger waits 213xh/214xh, the I/O IFs 262xh/263xh) registers its condition in
-WAITS / IF_CONDITIONS here; the runner needs no change for it.
+A wait or IF of another group registers its condition in WAITS / IF_CONDITIONS here (as the trigger waits
+213xh/214xh of the event handler do); the runner needs no change for it.
 """
 
 from __future__ import annotations
@@ -79,6 +79,9 @@ WAITS: dict[int, WaitFactory] = {
     C.WAIT_TIME: _wait_time,
     C.WAIT_MOTION_FINISHED: lambda mc, f, t: (lambda now: mc.gen.done(now)),
     C.WAIT_IN_TARGET_POSITION: lambda mc, f, t: (lambda now: mc.in_target),
+    # the next trigger edge at or after the wait's start ([MC] 4.3.171/172; the edges: events.py)
+    C.WAIT_RISING_TRIGGER: lambda mc, f, t: (lambda now: mc.events.edge_since(True, t)),
+    C.WAIT_FALLING_TRIGGER: lambda mc, f, t: (lambda now: mc.events.edge_since(False, t)),
     C.WAIT_DEMAND_POS_GREATER: _level(_demand_pos, GT),
     C.WAIT_DEMAND_POS_LESS: _level(_demand_pos, LT),
     C.WAIT_ACTUAL_POS_GREATER: _level(_actual_pos, GT),

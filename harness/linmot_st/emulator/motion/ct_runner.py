@@ -77,6 +77,7 @@ class CtRunner:
             self.mc.executed.append((t, header, bytes(params[:16])))
             self._wait = WAITS[cid](self.mc, fields, t)
             self.entry = None
+            self.mc._wake(t)            # the wait is checked every cycle (also when it is the first entry)
             return
         if row is not None and row.kind is Kind.CT_IF:
             target = if_target(self.mc, cid, fields)

@@ -13,6 +13,7 @@ from ...protocol.upids import (
     V_DEMAND_POSITION_16, V_ACTUAL_POSITION_16, V_STATUS_WORD, V_CONTROL_WORD, V_WARN_WORD, V_LOGGED_ERROR,
     V_DEMAND_POSITION, V_TARGET_POSITION, V_POSITION_DIFFERENCE, V_DEMAND_VELOCITY, V_ACTUAL_VELOCITY,
     V_CT_VAR1, V_CT_VAR2,
+    V_CAPTURED_POSITION, V_X4_INPUTS, V_X4_OUTPUTS, V_X6_OUTPUTS, V_ANALOG_X4_4,
 )
 from .trajectory import Sample
 from .units import VEL_RAW
@@ -75,6 +76,8 @@ class StatusWords:
             bits |= W.SW_SWITCH_ON_LOCKED
         if warn:
             bits |= W.SW_WARNING
+        if self.events.armed is not None:
+            bits |= W.SW_EVENT_HANDLER
         if s in W.SPECIAL_STATES and self.sub != W.SUB_FINISHED:
             bits |= W.SW_SPECIAL_MOTION
         if self.in_target:
@@ -113,6 +116,8 @@ class StatusWords:
                 low |= W.SV_IN_TARGET
             if self.homed:
                 low |= W.SV_HOMED
+            if self.events.armed is not None:
+                low |= W.SV_EVENT_HANDLER
         elif s in W.SPECIAL_STATES:
             low = self.sub
         else:
@@ -172,6 +177,18 @@ class StatusWords:
             return int(round(self.dem_p - self.axis.position))
         if upid in (V_CT_VAR1, V_CT_VAR2):
             return self.ct_runner.variables[1 if upid == V_CT_VAR1 else 2]
+        io = self.io
+        if io is not None:
+            if upid == V_CAPTURED_POSITION:
+                return io.captured_position
+            if upid == V_X4_INPUTS:
+                return io.input_word()
+            if upid == V_X4_OUTPUTS:
+                return io.outputs("X4")
+            if upid == V_X6_OUTPUTS:
+                return io.outputs("X6")
+            if upid == V_ANALOG_X4_4:
+                return _s16(io.analog() * 1000)
         return None
 
     def _record(self, t: int) -> None:

@@ -32,6 +32,12 @@ class Kind(enum.Enum):
     CT_VARIABLE = "set, add to, store or load a command-table variable"
     CT_IF = "command-table IF: a two-way jump on a condition"
     VAI_CT_VAR = "VAI to the position held in a command-table variable"
+    IO_OUTPUTS = "write interface outputs with a mask"
+    CLEAR_EVENTS = "clear the event handler"
+    ON_TRIGGER = "armed in the event handler, run on every trigger edge until 008xh"
+    VAI_CAPTURED = "VAI to the captured position plus an increment"
+    VAI_ANALOG = "VAI to the position the analog input X4.4 sets"
+    VAI_TRIG_CONFIG = "VAI with the Trig Rise / Trig Fall Config parameters"
 
 
 class Start(enum.Enum):
