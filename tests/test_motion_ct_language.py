@@ -265,6 +265,28 @@ def test_an_if_continues_at_its_true_or_false_entry(cid, true_fields, false_fiel
         assert mc.error_code == 0
 
 
+IO_IFS = [   # (IF, fields true, fields false) with 2.5 V on X4.4, X4.7 high, X6.1 set by 004xh
+    (CTL.IF_ANALOG_X4_4_LESS, dict(value=2501), dict(value=2500)),
+    (CTL.IF_MASKED_X4_INPUTS, dict(mask=0x0011, value=0x0010), dict(mask=0x0010, value=0)),   # bit 4 = X4.7
+    (CTL.IF_MASKED_X6_INPUTS, dict(mask=0x0003, value=0x0002), dict(mask=0x0002, value=0)),
+]
+
+
+@pytest.mark.parametrize("cid,true_fields,false_fields", IO_IFS, ids=[f"{c[0]:03X}h" for c in IO_IFS])
+def test_an_io_if_reads_the_drives_inputs(cid, true_fields, false_fields):
+    link = _link()
+    d, mc = link.drive, link.drive.mc
+    d.io.set_analog(2.5)
+    d.io.set_input("X4.7", 1)
+    d.io.write_outputs("X6", 0x0002, 0x0002, link.t)
+    link.advance(MS)
+    for fields, expected in ((true_fields, [1, 2]), (false_fields, [1, 3])):
+        load(d, {1: (cid, dict(fields, if_true=2, if_false=3), END),
+                 2: (C.NOP, {}, END), 3: (C.NOP, {}, END)})
+        run_table(link)
+        assert mc.ct_runner.executed == expected, (hex(cid), fields)
+
+
 def test_an_if_from_the_interface_starts_the_table_at_the_entry_it_selects():
     """INFERRED (docs/emulator.md 13.6)."""
     link = _link()

@@ -4,7 +4,7 @@ the IFs that ct_runner.py evaluates, and the two command-table variables.
 
 Signals and units: positions in 0.1 um (demand, actual, difference = demand - actual, as the variable 1B91h),
 velocities in 1E-6 m/s, current in mA (the demand current 1B93h: [MC] 4.3.185 calls the level "Dem Curr"), the
-masked IFs on the status and warn word as they are now. INFERRED (docs/emulator.md 13.6): "Greater/Less Than" are
+analog input X4.4 in mV, the masked IFs on the X4 inputs, the X6 levels, the status and warn word as they are now. INFERRED (docs/emulator.md 13.6): "Greater/Less Than" are
 strict; "Unsigned" compares |difference|; the IFs' values are in the unit of the same signal's wait.
 
 A wait or IF of another group registers its condition in WAITS / IF_CONDITIONS here (as the trigger waits
@@ -108,6 +108,21 @@ def _masked(word: Callable[[object], int]) -> Callable[[object, dict], bool]:
     return lambda mc, f: word(mc) & f["mask"] == f["value"] & f["mask"]
 
 
+def _analog_mv(mc) -> float:
+    """X4.4 in mV (INFERRED unit: [MC] 4.3.207 gives none; the variable 1DA3h's)."""
+    return round(mc.io.analog() * 1000) if mc.io is not None else 0
+
+
+def _x4_inputs(mc) -> int:
+    """The X4 input levels, bit 0 = X4.3 (the bit order of 003xh's outputs, INFERRED)."""
+    return mc.io.input_word() if mc.io is not None else 0
+
+
+def _x6_levels(mc) -> int:
+    """X6 read back: the model's X6 pins are outputs (004xh), so their levels (INFERRED)."""
+    return mc.io.outputs("X6") if mc.io is not None else 0
+
+
 def _status_word_now(mc) -> int:
     return mc._status_word(mc._warn_word())
 
@@ -130,6 +145,9 @@ IF_CONDITIONS: dict[int, Callable[[object, dict], bool]] = {
     C.IF_DIFF_POS_GREATER: _compare(_diff_pos, GT),
     C.IF_CURRENT_LESS: _compare(_current, LT),
     C.IF_CURRENT_GREATER: _compare(_current, GT),
+    C.IF_ANALOG_X4_4_LESS: _compare(_analog_mv, LT),
+    C.IF_MASKED_X4_INPUTS: _masked(_x4_inputs),
+    C.IF_MASKED_X6_INPUTS: _masked(_x6_levels),
     C.IF_MASKED_STATUS_WORD: _masked(_status_word_now),
     C.IF_MASKED_WARN_WORD: _masked(_warn_word_now),
 }

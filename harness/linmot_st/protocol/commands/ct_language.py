@@ -4,8 +4,7 @@ the IF jumps, and the VAI to a variable's position. Layouts from [MC] 4.3 (spec/
 120..123, 144..189). What each does is emulator/motion/ct_language.py's; the waits hold only a command-table
 sequence (Kind.WAIT, ct_runner.py).
 
-Left out: 213xh/214xh (trigger waits, with the drive's I/O), 260xh/262xh/263xh (analog and X4/X6 inputs: they need
-the I/O model); the [MC]-only 218xh/219xh, 24Exh, 256xh/257xh (named in the overview 4.2 only, no layout) and 266xh
+Left out: 213xh/214xh (the trigger waits: the triggered group's rows, protocol/commands/triggered.py); the [MC]-only 218xh/219xh, 24Exh, 256xh/257xh (named in the overview 4.2 only, no layout) and 266xh
 (the master encoder's counts)."""
 
 from __future__ import annotations
@@ -27,6 +26,8 @@ IF_DEMAND_POS_LESS, IF_DEMAND_POS_GREATER = 0x258, 0x259
 IF_ACTUAL_POS_LESS, IF_ACTUAL_POS_GREATER = 0x25A, 0x25B
 IF_DIFF_POS_LESS, IF_DIFF_POS_GREATER = 0x25C, 0x25D
 IF_CURRENT_LESS, IF_CURRENT_GREATER = 0x25E, 0x25F
+IF_ANALOG_X4_4_LESS = 0x260
+IF_MASKED_X4_INPUTS, IF_MASKED_X6_INPUTS = 0x262, 0x263
 IF_MASKED_STATUS_WORD, IF_MASKED_WARN_WORD = 0x264, 0x265
 VAI_GO_TO_CT_VAR1, VAI_GO_TO_CT_VAR2 = 0x0D4, 0x0D5
 VAI_GO_TO_CT_VAR1_FROM_ACT, VAI_GO_TO_CT_VAR2_FROM_ACT = 0x0D6, 0x0D7
@@ -96,6 +97,11 @@ register(
     _if(IF_DIFF_POS_GREATER, "IF Difference Position Greater Than", 204, "0.1 um"),
     _if(IF_CURRENT_LESS, "IF Current Less Than", 205, "mA"),          # [MC]'s header cell reads 25Cxh (spec 1c)
     _if(IF_CURRENT_GREATER, "IF Current Greater Than", 206, "mA"),
+    _if(IF_ANALOG_X4_4_LESS, "IF Analog Val On X4.4 Less Than", 207, "mV"),    # unit INFERRED (as 1DA3h)
+    CommandDef(IF_MASKED_X4_INPUTS, "IF Masked X4 Input Value Equal Than", _IF_MASKED, Kind.CT_IF,
+               source="[MC] 4.3.208"),
+    CommandDef(IF_MASKED_X6_INPUTS, "IF Masked X6 Input Value Equal Than", _IF_MASKED, Kind.CT_IF,
+               source="[MC] 4.3.209"),
     CommandDef(IF_MASKED_STATUS_WORD, "IF Masked Status Word Equal Than", _IF_MASKED, Kind.CT_IF,
                source="[MC] 4.3.210"),
     CommandDef(IF_MASKED_WARN_WORD, "IF Masked Warn Word Equal Than", _IF_MASKED, Kind.CT_IF,
