@@ -120,6 +120,19 @@ def test_a_program_with_a_loop_a_counter_a_branch_and_position_waits():
     assert abs((end - start) - 130 * MS) <= MS
 
 
+def test_the_program_runs_the_same_without_the_fast_path():
+    """Quiet cycles are off while a sequence runs; before and after it the fast path gives the same trajectory."""
+    runs = []
+    for quiet in (True, False):
+        link = _link(quiet_cycles=quiet)
+        load(link.drive, PROGRAM)
+        t0 = run_table(link)
+        link.advance(300 * MS)
+        runs.append([(s.t_ns - t0, s.demand, s.actual, s.status_word) for s in link.drive.mc.trajectory.between(t0)
+                     if s.t_ns % MS == 0])
+    assert runs[0] == runs[1]
+
+
 def test_a_command_from_the_interface_ends_the_sequence():
     """INFERRED (docs/emulator.md 13.6): the interface's command replaces the sequence, as it replaces a motion."""
     link = _link()
