@@ -32,9 +32,9 @@ VAD = dict(vmax=250_000, acc=500_000, dec=500_000)
 PREDEF = {0x14BE: 250_000, 0x14BF: 500_000, 0x14C0: 500_000}
 
 
-def _link(**settings) -> MotionLink:
+def _link(parameters: dict | None = None, **settings) -> MotionLink:
     # RxPDO3 mapping 2041h = 2: parameter bytes 6..11, so the 12-byte commands (0D4xh..0D7xh) fit
-    profile = load_profile().with_defaults({0x1194: 2, 0x2041: 2, **PREDEF})
+    profile = load_profile().with_defaults({0x1194: 2, 0x2041: 2, **PREDEF, **(parameters or {})})
     link = MotionLink(E1100Drive(1, profile, timings=DriveTimings.fast(), motion=MotionSettings(**settings)))
     link.enable()
     link.home()
@@ -354,6 +354,15 @@ def test_variables_to_and_from_upid_ram_values():
     assert d.params[P_PREDEF_VMAX].ram == 123_456 and d.params[0x14BF].ram == PREDEF[0x14BF]
     assert mc.ct_runner.variables == {1: 123_456, 2: -1}
     assert mc.state == W.OPERATION_ENABLED
+
+
+def test_the_variables_travel_in_a_txpdo_mapped_by_upid():
+    """TxPDO3 by UPID (203Bh/203Ch, docs/emulator.md 13.5) carries Var 1 and Var 2 as it carries any variable."""
+    link = _link({0x203B: V_CT_VAR1, 0x203C: V_CT_VAR2})
+    link.command(C.SET_CT_VAR1, value=-5)
+    link.command(C.SET_CT_VAR2, value=70_000)
+    link.advance(5 * MS)
+    assert struct.unpack("<ii", link.pdos(3)[-1][1]) == (-5, 70_000)
 
 
 def test_an_mc_start_clears_the_variables():
