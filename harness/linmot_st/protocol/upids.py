@@ -37,6 +37,7 @@ V_CT_VAR1, V_CT_VAR2 = 0x1E72, 0x1E73                                          #
 P_TRIGGER_MODE = 0x170C                                              # [MC] 7.2.2
 P_TRIG_RISE_INHIBIT, P_TRIG_FALL_INHIBIT = 0x170D, 0x170E            # [MC] 7.2.2.2
 P_TRIG_RISE_DELAY, P_TRIG_FALL_DELAY = 0x170F, 0x1710                # [MC] 7.2.2.3
+P_BRAKE_OPERATION_ENABLED = 0x1717                                  # [MC] 7.2.1.1 (X4.3 brake: status word bit 0)
 P_LIMIT_SWITCH_ERROR = 0x121B                                        # [MC] 7.2.3 (0 none, 1 power off, 2 quick stop)
 P_ANALOG_POS_MIN, P_ANALOG_POS_MAX = 0x14DC, 0x14DD                  # INVENTED (019xh: position at X4.4 min / max)
 P_TRIG_RISE_TARGET, P_TRIG_RISE_VMAX, P_TRIG_RISE_ACC, P_TRIG_RISE_DEC = 0x14F0, 0x14F1, 0x14F2, 0x14F3  # INVENTED

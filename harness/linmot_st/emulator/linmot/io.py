@@ -80,6 +80,8 @@ class DriveIO:
         self.on_trigger: Callable[[bool, int], None] = lambda rising, t: None
         self.on_capture: Callable[[int], int | None] = lambda t: None
         self.on_level: Callable[[str, int, int], None] = lambda name, level, t: None
+        # X4.3 as brake output ([MC] 7.2.1.1, 1717h): its level from the MC, None when X4.3 is no brake
+        self.brake: Callable[[], int | None] = lambda: None
         self.captured_position = 0
         self._inhibit_until = -1         # [MC] 7.2.2.2: further edges ignored until then
         self._inhibit_level = 0          # the inhibited signal
@@ -105,11 +107,17 @@ class DriveIO:
     def output(self, name: str) -> int:
         if name in X6_OUTPUTS:
             return self.out_x6 >> X6_OUTPUTS.index(name) & 1
-        return self.out_x4 >> X4_OUTPUTS.index(_pin(name, X4_OUTPUTS)) & 1
+        return self.outputs("X4") >> X4_OUTPUTS.index(_pin(name, X4_OUTPUTS)) & 1
 
     def outputs(self, connector: str = "X4") -> int:
-        """The output word of a connector: X4 (bit 0 = X4.3) or X6 (bit n = X6.n)."""
-        return {"X4": self.out_x4, "X6": self.out_x6}[connector]
+        """The output word of a connector: X4 (bit 0 = X4.3) or X6 (bit n = X6.n). X4.3 configured as brake
+        output follows the MC (1 = 24 V, released), not 003xh."""
+        if connector == "X6":
+            return self.out_x6
+        if connector != "X4":
+            raise KeyError(connector)
+        brake = self.brake()
+        return self.out_x4 if brake is None else (self.out_x4 & ~1) | brake
 
     def input_word(self) -> int:
         """The X4 input levels as a word, bit 0 = X4.3 (the same bit numbering as the outputs)."""
