@@ -33,6 +33,7 @@ V_STATUS_WORD, V_CONTROL_WORD, V_WARN_WORD, V_LOGGED_ERROR = 0x1D51, 0x1D52, 0x1
 V_DEMAND_POSITION, V_TARGET_POSITION, V_POSITION_DIFFERENCE = 0x1B8C, 0x1B90, 0x1B91   # INVENTED
 V_DEMAND_VELOCITY = 0x1BAE                                                     # INVENTED
 V_ACTUAL_VELOCITY = 0x1BAF                                                     # public CANFuck PDO note
+V_CT_VAR1, V_CT_VAR2 = 0x1E72, 0x1E73                                          # [MC] 4.3.124/125
 
 # the drive's I/O (emulator/linmot/io.py) and the triggered commands (emulator/motion/triggered.py)
 P_TRIGGER_MODE = 0x170C                                              # [MC] 7.2.2

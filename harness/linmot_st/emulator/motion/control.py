@@ -109,6 +109,7 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
         self._now = t
         self.running = True
         self._reset_state()
+        self.ct_runner.clear_variables()          # RAM of the MC: 0 at every MC start (INFERRED)
         self.axis.forget_reference()
         self.gen = Hold(self.axis.position)
         self.dem_p = self.axis.position
@@ -167,7 +168,8 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
                 self._fail(W.ERR_MOTION_CMD_WRONG_STATE, t)     # seed 004 3.7: error, state 4
                 self._record(t)
             return      # INFERRED: in states 0..5 (and 14) a new count is taken but not executed
-        self.ct_runner.stop()   # a command from the interface ends a running command-table sequence
+        if self.s.interface_command_ends_sequence:
+            self.ct_runner.stop()   # a command from the interface ends a running command-table sequence
         self.execute(header, params, t)
         self._record(t)
 

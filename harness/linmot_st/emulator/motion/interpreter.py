@@ -19,6 +19,7 @@ from ...protocol.upids import (
     P_PREDEF_VMAX, P_QUICK_STOP_DEC, P_SCALE_ACC, P_SCALE_POS, P_SCALE_VEL,
 )
 from . import vai_variants as VV
+from . import ct_language
 from .setpoints import CurvePlan, StopPlan, VaPlan
 from .units import ACC_RAW, VEL_RAW
 
@@ -195,4 +196,8 @@ HANDLERS: dict[Kind, Handler] = {
     Kind.VAI_16BIT_DEC_ACC: _vai,
     Kind.SELECT_CONTROLLER_SET: VV.select_controller_set,
     Kind.RESET: VV.reset,
+    Kind.CT_MODIFY: ct_language.modify_entry,
+    Kind.CT_VARIABLE: ct_language.variable,
+    Kind.CT_IF: ct_language.if_jump,
+    Kind.VAI_CT_VAR: ct_language.vai_to_variable,
 }

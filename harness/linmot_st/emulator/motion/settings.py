@@ -46,6 +46,9 @@ class MotionSettings:
     # position transition; False: only 008xh and leaving Operation Enabled do, and a move queued before the stop
     # starts when the stop ramp ends ([MC] 4.3.134/144's mechanism taken literally; docs/emulator.md 13.3.1)
     stop_drops_pending: bool = False
+    # a motion command from the interface while a command-table sequence runs: ends the sequence (True), or runs
+    # and lets the sequence go on (False); no source says which (docs/emulator.md 13.6)
+    interface_command_ends_sequence: bool = True
 
     # demand current (1B93h, mA) = moving mass x actual acceleration / force constant
     moving_mass_kg: float = 0.5
