@@ -152,3 +152,19 @@ def test_cams_are_e1100_only_and_every_row_is_accepted():
         link.command(c.cid, 1 * MS, **fields)
         link.advance(2 * MS)
         assert mc.error_code == 0, f"{c.cid:03X}h: error {mc.error_code:04X}h"
+
+
+def test_the_b1100_has_no_cam_motions():
+    """The drive's series (its model's name) decides; main has no B1100 model yet, so an E1100 renamed stands
+    in for it (with the B1100 model merged: make_drive("B1100", 1))."""
+    import dataclasses
+    from linmot_st.emulator.linmot.model import E1100
+    from linmot_st.emulator.models import MODELS, make_drive
+    from linmot_st.protocol import words as W
+    b1100 = MODELS.get("B1100") or dataclasses.replace(E1100, name="B1100")
+    for model, expect in ((b1100, W.ERR_UNKNOWN_MOTION_CMD), (E1100, 0)):
+        d = make_drive(model, 1)
+        d.mc.error_code = 0
+        header = C.ENCODER_CAM_DISABLE << 4 | 1
+        assert d.mc.execute(header, b"", 0) == (expect == 0)
+        assert d.mc.error_code == expect

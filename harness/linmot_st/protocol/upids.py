@@ -43,3 +43,5 @@ P_TRIG_CAM_CURVE_RISE, P_TRIG_CAM_CURVE_FALL = 0x154A, 0x154B        # [MC] 4.3.
 P_TRIG_CAM_DELAY_RISE, P_TRIG_CAM_DELAY_FALL = 0x154C, 0x154D        # [MC] 4.3.63..68
 V_CAM_ENABLED = 0x1BA9                                               # [MC] 5.5.2
 V_MASTER_ENCODER_COUNTS, V_MASTER_ENCODER_SPEED = 0x1BA0, 0x1BA1     # INVENTED
+P_WINDING_LEFT, P_WINDING_RIGHT, P_WINDING_PITCH = 0x1540, 0x1541, 0x1542    # INVENTED ([MC] gives headers only)
+V_ACTUAL_FORCE = 0x1BFF                 # zylos146/CANFuck docs/a1100-pdo-config.md (actual force, 0.1 N)

@@ -22,6 +22,7 @@ from ...protocol.upids import (
     P_CAM_MODE, P_CAM_MODULO_LENGTH, P_CURVE_AMPLITUDE, P_CURVE_OFFSET, P_QUICK_STOP_DEC, P_TRIG_CAM_CURVE_FALL,
     P_TRIG_CAM_CURVE_RISE, P_TRIG_CAM_DELAY_FALL, P_TRIG_CAM_DELAY_RISE,
 )
+from .drive_series import on_series
 from .setpoints import StopPlan, _demands_by_at
 from .units import ACC_RAW
 
@@ -247,20 +248,4 @@ def trigger_edge(mc, rising: bool, t: int) -> None:
     mc._record(t)
 
 
-def sync_variable(mc, upid: int) -> int | None:
-    """The variables of the master encoder and the cams (None: not one of them)."""
-    from ...protocol.upids import V_CAM_ENABLED, V_MASTER_ENCODER_COUNTS, V_MASTER_ENCODER_SPEED
-    if upid == V_MASTER_ENCODER_COUNTS:
-        return _s32(mc.encoder.counts(mc._now))
-    if upid == V_MASTER_ENCODER_SPEED:
-        return _s32(round(mc.encoder.speed(mc._now)))
-    if upid == V_CAM_ENABLED:
-        return int(cam_operating(mc))
-    return None
-
-
-def _s32(v: int) -> int:
-    return (int(v) + (1 << 31)) % (1 << 32) - (1 << 31)
-
-
-HANDLERS = {C.Kind.ENCODER_CAM: _cam_command, C.Kind.TRIGGERED_CAM: _triggered_cam}
+HANDLERS = {C.Kind.ENCODER_CAM: on_series(_cam_command), C.Kind.TRIGGERED_CAM: on_series(_triggered_cam)}

@@ -179,5 +179,8 @@ HANDLERS: dict[Kind, Handler] = {
 }
 
 # the kinds of their own modules (one line each)
-from .encoder_cams import HANDLERS as _CAM_HANDLERS  # noqa: E402
-HANDLERS.update(_CAM_HANDLERS)
+from . import encoder_cams, force_control, position_indexing, winding  # noqa: E402
+HANDLERS.update(encoder_cams.HANDLERS)
+HANDLERS.update(position_indexing.HANDLERS)
+HANDLERS.update(winding.HANDLERS)
+HANDLERS.update(force_control.HANDLERS)

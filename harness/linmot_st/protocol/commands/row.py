@@ -30,6 +30,9 @@ class Kind(enum.Enum):
     WAIT = "command-table wait (acts only inside a command-table sequence)"
     ENCODER_CAM = "encoder cam: define, enable/disable, go to sync position, set the counter"
     TRIGGERED_CAM = "encoder cam armed on a trigger edge with delay counts"
+    POSITION_INDEXING = "encoder position indexing: the target follows the master encoder through a VAI"
+    WINDING = "encoder winding: a traverse synchronised to the master's revolutions"
+    FORCE_CONTROL = "VAI motion that changes to force control at a force limit"
 
 
 class Start(enum.Enum):
