@@ -168,3 +168,27 @@ def test_the_b1100_has_no_cam_motions():
         header = C.ENCODER_CAM_DISABLE << 4 | 1
         assert d.mc.execute(header, b"", 0) == (expect == 0)
         assert d.mc.error_code == expect
+
+
+def test_the_fast_path_runs_a_cam_as_the_generic_cycle_does():
+    """The quiet cycles (fast_path.py) compute the cam follower ahead: the trajectory is the same as with every
+    cycle run one by one (MotionSettings.quiet_cycles False), sample for sample."""
+    from linmot_st.emulator.motion import MotionSettings
+    runs = []
+    for quiet in (True, False):
+        defaults = {0x1194: 2, 0x146F: 280 * MM, 0x146E: -10 * MM, 0x2041: 2, U.P_CAM_MODE: 1,
+                    U.P_MASTER_ENCODER_SOURCE: 1}
+        d = E1100Drive(1, load_profile().with_defaults(defaults), timings=DriveTimings.fast(),
+                       motion=MotionSettings(quiet_cycles=quiet))
+        d.curves.flash[CAM_ID] = cam_curve()
+        link = MotionLink(d)
+        link.enable()
+        link.home()
+        link.command(C.cam_command(1, C.CAM_DEFINE_FROM_ACT_POS), 1 * MS, curve_id=CAM_ID, start_count=0)
+        link.command(C.cam_command(1, C.CAM_Y_ENABLE), 1 * MS)
+        link.command(C.ENCODER_CAM_ENABLE, 1 * MS)
+        t0 = link.t
+        d.mc.encoder.drive_with(SpeedProfile([(t0, 15_000), (t0 + 300 * MS, -7_000)]), t0)
+        link.advance(600 * MS)
+        runs.append(d.mc.trajectory.between(t0, link.t))
+    assert len(runs[0]) > 500 and runs[0] == runs[1]

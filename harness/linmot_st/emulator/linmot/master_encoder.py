@@ -49,7 +49,7 @@ class ConstantSpeed:
         self.speed, self.start, self.t0_ns = float(speed), float(start), t0_ns
 
     def counts(self, t_ns: int) -> float:
-        return self.start + self.speed * (t_ns - self.t0_ns) * NS
+        return self.start + self.speed * ((t_ns - self.t0_ns) / 1e9)
 
     def rate(self, t_ns: int) -> float:
         return self.speed
@@ -66,7 +66,7 @@ class SpeedProfile:
             raise ValueError("speed profile steps must be in increasing time")
         self.base = [float(start)]
         for i in range(1, len(self.times)):
-            self.base.append(self.base[-1] + self.speeds[i - 1] * (self.times[i] - self.times[i - 1]) * NS)
+            self.base.append(self.base[-1] + self.speeds[i - 1] * ((self.times[i] - self.times[i - 1]) / 1e9))
 
     def _seg(self, t_ns: int) -> int:
         return bisect.bisect_right(self.times, t_ns) - 1
@@ -75,7 +75,7 @@ class SpeedProfile:
         i = self._seg(t_ns)
         if i < 0:
             return self.base[0]
-        return self.base[i] + self.speeds[i] * (t_ns - self.times[i]) * NS
+        return self.base[i] + self.speeds[i] * ((t_ns - self.times[i]) / 1e9)
 
     def rate(self, t_ns: int) -> float:
         i = self._seg(t_ns)
@@ -169,7 +169,8 @@ class MasterEncoder:
         """The counter at t_ns (whole increments)."""
         if not self.connected:
             return self.offset
-        return math.floor(self.signal.counts(t_ns) * self._scale()) + self.offset
+        # whole increments; the 1e-6 absorbs the float rounding of a signal that lands exactly on an edge
+        return math.floor(self.signal.counts(t_ns) * self._scale() + 1e-6) + self.offset
 
     def rate(self, t_ns: int) -> float:
         """Counts/s at t_ns (unfiltered: the slope the cam's feedforward uses)."""
@@ -185,3 +186,30 @@ class MasterEncoder:
 
     def revolutions(self, t_ns: int) -> float:
         return self.counts(t_ns) / self.counts_per_rev()
+
+
+def parse_signal(spec: str) -> Signal:
+    """A signal from a command-line spec (`linmot-st emulate --master-encoder`):
+    `speed:EDGES_PER_S` (constant speed from time 0), `profile:T=EDGES_PER_S,T=EDGES_PER_S,...` (T in seconds of
+    the drive's clock, each speed holding until the next), `recorded:FILE` (a CSV of `seconds,edges` lines,
+    linear between). Raises ValueError with what is wrong."""
+    kind, _, rest = spec.partition(":")
+    try:
+        if kind == "speed":
+            return ConstantSpeed(float(rest))
+        if kind == "profile":
+            steps = []
+            for item in rest.split(","):
+                t, _, v = item.partition("=")
+                steps.append((round(float(t) * 1e9), float(v)))
+            return SpeedProfile(steps)
+        if kind == "recorded":
+            import csv
+            with open(rest, newline="") as f:
+                rows = [r for r in csv.reader(f) if r and not r[0].lstrip().startswith("#")]
+            return Recorded([(round(float(t) * 1e9), float(c)) for t, c in rows])
+    except OSError as exc:
+        raise ValueError(f"{rest}: {exc.strerror or exc}") from None
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"master encoder signal {spec!r}: {exc}") from None
+    raise ValueError(f"master encoder signal {spec!r}: expected speed:N, profile:T=N,... or recorded:FILE")
