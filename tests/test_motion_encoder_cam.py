@@ -12,7 +12,6 @@ import pytest
 
 from linmot_st.emulator import Curve, DriveTimings, E1100Drive, load_profile
 from linmot_st.emulator.linmot.master_encoder import ConstantSpeed, Function, Recorded, SpeedProfile
-from linmot_st.emulator.motion.encoder_cams import trigger_edge
 from linmot_st.emulator.testing import MotionLink
 from linmot_st.protocol import commands as C
 from linmot_st.protocol import upids as U
@@ -105,28 +104,37 @@ def test_cam_to_position_in_infinite_mode_runs_once_and_holds():
     assert mc.dem_p == pytest.approx(here + 50 * MM)                   # ran once, holds at its end
 
 
-def test_triggered_cam_starts_after_its_delay_counts():
-    link = link_with_cam()
-    mc = link.drive.mc
+def test_triggered_cam_starts_after_its_delay_counts_on_every_edge():
+    link = link_with_cam({0x170C: 1})                                  # trigger mode: direct ([MC] 7.2.2)
+    mc, io = link.drive.mc, link.drive.io
     here = mc.dem_p
     link.command(C.TRIG_CAM_RISE, curve_id=CAM_ID, delay=1500)
     link.advance(2 * MS)
     assert link.drive.ram(U.P_TRIG_CAM_CURVE_RISE) == CAM_ID and link.drive.ram(U.P_TRIG_CAM_DELAY_RISE) == 1500
     t0 = link.t
-    mc.encoder.drive_with(ConstantSpeed(10_000, t0_ns=t0), t0)
+    mc.encoder.drive_with(ConstantSpeed(10_000, t0_ns=t0), t0)         # 10 counts per ms
     link.advance(100 * MS)
-    assert mc.dem_p == here                                            # not triggered yet: no motion
-    t_edge = link.t
-    edge_count = mc.encoder.counts(t_edge)
-    trigger_edge(mc, True, t_edge)
-    link.advance(1200 * MS)
-    start = edge_count + 1500
-    assert check(link, t_edge, link.t, start=start, offset=here) > 1000
-    moving = [s.t_ns for s in mc.trajectory.between(t_edge, link.t) if s.demand != here]
-    assert mc.encoder.counts(moving[0]) > start                       # it started after the delay counts
-    assert mc.encoder.counts(moving[0]) <= start + 20                 # within one MC cycle of counts (10/ms)
-    trigger_edge(mc, True, link.t)                                     # one shot: the next edge starts nothing
-    assert mc.dem_p == pytest.approx(here)
+    assert mc.dem_p == here                                            # no edge yet: no motion
+    starts = []
+    for k in range(2):                                                 # the event handler re-arms: two parts
+        edge = link.t + 300_000                                        # between two MC cycles
+        io.set_input("X4.6", 1, edge)
+        io.set_input("X4.6", 0, edge + 5 * MS)
+        t_edge = edge
+        link.advance(1100 * MS)
+        start = mc.encoder.counts(t_edge) + 1500
+        assert check(link, t_edge + MS, link.t, start=start, offset=here) > 1000
+        moving = [s.t_ns for s in mc.trajectory.between(t_edge, link.t) if s.demand != here]
+        assert start < mc.encoder.counts(moving[0]) <= start + 10     # after the delay, within one MC cycle
+        assert mc.dem_p == pytest.approx(here)                         # a closed cam: back where it started
+        starts.append(start)
+    assert starts[1] > starts[0] + 8000
+    link.command(C.CLEAR_EVENT_EVALUATION)
+    link.advance(2 * MS)
+    t1 = link.t
+    io.set_input("X4.6", 1, t1 + MS)
+    link.advance(500 * MS)
+    assert all(s.demand == pytest.approx(here) for s in mc.trajectory.between(t1, link.t))   # cleared by 008xh
 
 
 def test_the_master_encoder_parameters_and_signals():

@@ -66,7 +66,6 @@ class EncoderCams:
         self.mc = mc
         self.cams: dict[object, Cam] = {}
         self.enabled: dict[object, bool] = {1: False, 2: False}
-        self.armed: dict[bool, dict] = {}         # rising (True) / falling (False) edge -> the cam to start
 
     def modulo(self) -> int:
         """The modulo cam length, or 0 in infinite-length mode."""
@@ -88,7 +87,7 @@ class EncoderCams:
         modulo = self.modulo()
         best = None
         for k, cam in active:
-            rel = (count - cam.start) % modulo if modulo else count - cam.start
+            rel = (count - cam.start) % modulo if modulo and k != "trigger" else count - cam.start
             if rel >= 0 and (best is None or rel < best[0]):
                 best = (rel, cam)
         if best is None:        # infinite length, before every cam: rest at the first one's start
@@ -209,8 +208,10 @@ _RISING = frozenset({C.TRIG_CAM_RISE, C.TRIG_CAM_RISE_TARGET_LENGTH, C.TRIG_CAM_
 
 
 def _triggered_cam(mc, c: CommandDef, f: dict, t: int) -> bool:
-    """069xh..06Exh: arm a cam start on the trigger edge; the curve ID and delay go to 154Ah..154Dh's RAM values
-    ([MC] 4.3.63..68; 06Exh's text names the rising-edge UPIDs, taken as a copy error: INFERRED 154Bh/154Dh)."""
+    """069xh..06Exh: "setup in the event handler to start a cam curve on the trigger event" ([MC] 4.3.63..68): the
+    curve ID and delay go to 154Ah..154Dh's RAM values (06Exh's text names the rising-edge UPIDs: taken as a copy
+    error, INFERRED 154Bh/154Dh), and the event handler runs the cam start on every matching edge until 008xh
+    (events.py, [MC] 4.3.6)."""
     if _curve(mc, f["curve_id"]) is None:
         return mc._fail(W.ERR_CURVE_NOT_DEFINED, t)
     rising = c.cid in _RISING
@@ -218,34 +219,32 @@ def _triggered_cam(mc, c: CommandDef, f: dict, t: int) -> bool:
                         (P_TRIG_CAM_DELAY_RISE if rising else P_TRIG_CAM_DELAY_FALL, f["delay"])):
         if upid in mc.params:
             mc.params[upid].ram = value
-    cams_of(mc).armed[rising] = dict(f)
+    fields = dict(f)
+    mc.events.arm(rising, lambda tc: _start_triggered(mc, fields, mc.events.last_edge.get(rising, tc), tc))
     return True
 
 
-def trigger_edge(mc, rising: bool, t: int) -> None:
-    """The trigger input saw an edge at t: a cam armed on it starts `delay` counts later, from the demand
-    position then (INFERRED), once (INFERRED: the event handler is set up again for the next part)."""
-    mc.sync(t)
-    cams = cams_of(mc)
-    f = cams.armed.pop(rising, None)
-    if f is None or not mc.running or mc.state != W.OPERATION_ENABLED:
-        return
+def _start_triggered(mc, f: dict, t_edge: int, t: int) -> bool:
+    """The armed edge came at t_edge (its action runs in the MC cycle at t): the cam starts `delay` counts after
+    the counter at the edge, from the demand position then (INFERRED), running once over its length (the
+    infinite cam length [MC] 5.5.1 asks for)."""
     curve = _curve(mc, f["curve_id"])
     if curve is None:
-        mc._fail(W.ERR_CURVE_NOT_DEFINED, t)
-        mc._record(t)
-        return
+        return mc._fail(W.ERR_CURVE_NOT_DEFINED, t)
+    cams = cams_of(mc)
     y = [float(v) for v in curve.setpoints]
     here = mc.gen.at(t)[0]
     amp = f.get("amplitude", mc.par(P_CURVE_AMPLITUDE, 1000)) / 1000.0
     if "target" in f and y[-1] != y[0]:
         amp = (f["target"] - here) / (y[-1] - y[0])
     length = f.get("cam_length") or curve.x_length
-    cams.cams["trigger"] = Cam(y, mc.encoder.counts(t) + f["delay"], max(int(length), 1), here - amp * y[0], amp)
+    if length <= 0 or not -20.0 <= amp <= 20.0:
+        return mc._fail(W.ERR_CURVE_AMP_SCALE, t)
+    cams.cams["trigger"] = Cam(y, mc.encoder.counts(t_edge) + f["delay"], int(length), here - amp * y[0], amp)
     cams.enabled["trigger"] = True
     if not cam_operating(mc):
         mc._start(CamFollower(t, cams, here))
-    mc._record(t)
+    return True
 
 
 HANDLERS = {C.Kind.ENCODER_CAM: on_series(_cam_command), C.Kind.TRIGGERED_CAM: on_series(_triggered_cam)}

@@ -33,6 +33,12 @@ class Kind(enum.Enum):
     POSITION_INDEXING = "encoder position indexing: the target follows the master encoder through a VAI"
     WINDING = "encoder winding: a traverse synchronised to the master's revolutions"
     FORCE_CONTROL = "VAI motion that changes to force control at a force limit"
+    IO_OUTPUTS = "write interface outputs with a mask"
+    CLEAR_EVENTS = "clear the event handler"
+    ON_TRIGGER = "armed in the event handler, run on every trigger edge until 008xh"
+    VAI_CAPTURED = "VAI to the captured position plus an increment"
+    VAI_ANALOG = "VAI to the position the analog input X4.4 sets"
+    VAI_TRIG_CONFIG = "VAI with the Trig Rise / Trig Fall Config parameters"
 
 
 class Start(enum.Enum):
