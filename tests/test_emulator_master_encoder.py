@@ -69,3 +69,16 @@ def test_emulate_refuses_a_bad_signal(capsys):
     rc = main(["emulate", "--interface", "virtual", "--channel", "enc21", "--master-encoder", "speed:x",
                "--duration", "0"])
     assert rc == 2 and "master encoder signal" in capsys.readouterr().err
+
+
+def test_the_counter_keeps_its_history():
+    """A new signal or counter value changes the counter from then on; the counter at earlier times (the
+    trajectory record's samples) stays what it was."""
+    e = encoder()
+    e.drive_with(ConstantSpeed(1000), 0)
+    before = [e.counts(t * MS) for t in range(0, 1000, 100)]
+    e.drive_with(ConstantSpeed(-4000, t0_ns=1000 * MS), 1000 * MS)
+    e.set_value(0, 1500 * MS)
+    assert [e.counts(t * MS) for t in range(0, 1000, 100)] == before
+    assert e.counts(1000 * MS) == 1000 and e.counts(1250 * MS) == 0 and e.counts(1500 * MS) == 0
+    assert e.counts(1600 * MS) == -400 and e.rate(500 * MS) == 1000 and e.rate(1600 * MS) == -4000

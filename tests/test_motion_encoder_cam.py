@@ -51,11 +51,12 @@ def expected(count: int, start: int, offset: float, amp: float = 1.0, length: in
 
 def check(link, t0: int, t1: int, **cam) -> int:
     """Every sample's demand equals the cam at the counter then; returns how many were checked."""
-    enc = link.drive.mc.encoder
-    samples = link.drive.mc.trajectory.between(t0, t1)
+    trajectory = link.drive.mc.trajectory
+    samples = trajectory.between(t0, t1)
     for s in samples:
-        want = expected(enc.counts(s.t_ns), **cam)
-        assert s.demand == pytest.approx(want, abs=1e-6), (s.t_ns, enc.counts(s.t_ns), s.demand, want)
+        count = trajectory.master_counts(s.t_ns)                    # the encoder as recorded
+        want = expected(count, **cam)
+        assert s.demand == pytest.approx(want, abs=1e-6), (s.t_ns, count, s.demand, want)
     return len(samples)
 
 
@@ -74,7 +75,8 @@ def test_cam_follows_the_master_at_two_speeds_backwards_and_repeats_in_modulo_mo
     link.advance(1400 * MS)
     cam = dict(start=0, offset=start_pos, modulo=8000)
     assert check(link, t0, link.t, **cam) > 1000
-    counts = [mc.encoder.counts(s.t_ns) for s in mc.trajectory.between(t0, link.t)]
+    cols = mc.trajectory.columns()
+    counts = [c for c, t in zip(cols["master_counts"], cols["t_ns"]) if t >= t0]
     assert max(counts) == 13_000 and counts[-1] == 13_000 - 3_600      # forwards, then backwards
     # the cam repeated: it reached its top (80 mm) in the first and the second revolution
     tops = [s.t_ns for s in mc.trajectory.between(t0, link.t) if s.demand >= start_pos + 79 * MM]

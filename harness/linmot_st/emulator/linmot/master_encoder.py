@@ -131,13 +131,36 @@ class Function:
 class MasterEncoder:
     """The drive's master encoder counter. `par(upid, default)` reads the encoder parameters' RAM values;
     `before_change(t)` is called before the signal or the counter changes (the MC syncs its cycles to t, so
-    nothing it computed ahead used the old signal)."""
+    nothing it computed ahead used the old signal).
+
+    The counter's history is kept: `segments` = [(from t_ns, signal, offset)], one per drive_with / set_value,
+    so `counts(t)` is the counter at any time, past ones included (the trajectory record reads it for its
+    samples: Trajectory.master_counts). The encoder parameters are read as they are now."""
 
     def __init__(self, par: Callable[[int, int], int], before_change: Callable[[int], None] | None = None):
         self._par = par
         self._before_change = before_change or (lambda t: None)
-        self.signal: Signal = Standstill()
-        self.offset = 0             # counts added by Encoder Cam Set Value (104xh)
+        self.segments: list[tuple[int, Signal, int]] = [(-(1 << 62), Standstill(), 0)]
+        self._starts = [-(1 << 62)]
+
+    @property
+    def signal(self) -> Signal:
+        return self.segments[-1][1]
+
+    @property
+    def driven(self) -> bool:
+        """A signal or a counter value was ever given."""
+        return len(self.segments) > 1
+
+    def _segment(self, t_ns: int) -> tuple[int, Signal, int]:
+        return self.segments[bisect.bisect_right(self._starts, t_ns) - 1]
+
+    def _new_segment(self, t_ns: int, signal: Signal, offset: int) -> None:
+        if self._starts[-1] == t_ns and len(self.segments) > 1:
+            self.segments[-1] = (t_ns, signal, offset)
+        else:
+            self.segments.append((t_ns, signal, offset))
+            self._starts.append(t_ns)
 
     # ---- driving it (tests, `linmot-st emulate`) ----
     def drive_with(self, signal: Signal, t_ns: int) -> None:
@@ -145,13 +168,13 @@ class MasterEncoder:
         the jump, as a counter does when a cable is plugged)."""
         self._before_change(t_ns)
         before = self.counts(t_ns)
-        self.signal = signal
-        self.offset += before - self.counts(t_ns)
+        self._new_segment(t_ns, signal, before - self._raw(signal, t_ns))
 
     def set_value(self, value: int, t_ns: int) -> None:
         """104xh: the counter reads `value` now."""
         self._before_change(t_ns)
-        self.offset += int(value) - self.counts(t_ns)
+        signal = self._segment(t_ns)[1]
+        self._new_segment(t_ns, signal, int(value) - self._raw(signal, t_ns))
 
     # ---- what the drive reads ----
     @property
@@ -165,16 +188,21 @@ class MasterEncoder:
         sign = -1.0 if self._par(P_MASTER_ENCODER_DIRECTION, 0) else 1.0
         return sign / _EDGES_PER_COUNT.get(decoding, 1)
 
+    def _raw(self, signal: Signal, t_ns: int) -> int:
+        """The signal's counts through decoding and direction (whole increments; the 1e-6 absorbs the float
+        rounding of a signal that lands exactly on an edge)."""
+        if not self.connected:
+            return 0
+        return math.floor(signal.counts(t_ns) * self._scale() + 1e-6)
+
     def counts(self, t_ns: int) -> int:
         """The counter at t_ns (whole increments)."""
-        if not self.connected:
-            return self.offset
-        # whole increments; the 1e-6 absorbs the float rounding of a signal that lands exactly on an edge
-        return math.floor(self.signal.counts(t_ns) * self._scale() + 1e-6) + self.offset
+        _, signal, offset = self._segment(t_ns)
+        return self._raw(signal, t_ns) + offset
 
     def rate(self, t_ns: int) -> float:
         """Counts/s at t_ns (unfiltered: the slope the cam's feedforward uses)."""
-        return self.signal.rate(t_ns) * self._scale() if self.connected else 0.0
+        return self._segment(t_ns)[1].rate(t_ns) * self._scale() if self.connected else 0.0
 
     def speed(self, t_ns: int) -> float:
         """Counts/s averaged over the speed filter time 1293h (in 0.1 ms: INFERRED unit)."""

@@ -51,6 +51,7 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
         self.executed: list[tuple[int, int, bytes]] = []   # (t_ns, header, parameters) of every command run
         self.ct_runner = CtRunner(self)
         self.encoder = MasterEncoder(self.par, self.sync)      # the master encoder input ([MC] 7.3)
+        self.trajectory.master_encoder = self.encoder
         self.events = EventHandler(self)
         self.io = None                      # the drive's I/O (emulator/linmot/io.py), set by the drive
         self.running = False
