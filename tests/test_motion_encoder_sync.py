@@ -109,3 +109,32 @@ def test_winding_adaptation_commands_are_accepted():
         link.advance(2 * MS)
         assert link.drive.mc.error_code == 0
     assert link.drive.mc.winding_adaptation is True
+
+
+def reversals(samples) -> list[float]:
+    """The demand at each reversal (a local extreme of the demand)."""
+    d = [s.demand for s in samples]
+    return [d[i] for i in range(1, len(d) - 1) if (d[i] - d[i - 1]) * (d[i + 1] - d[i]) < 0
+            or (d[i] != d[i - 1] and d[i + 1] == d[i])]
+
+
+def test_winding_adaptation_moves_the_reversal_positions_inwards_until_stopped():
+    left, right, pitch = 10 * MM, 60 * MM, 25 * MM
+    link = make_link({U.P_WINDING_LEFT: left, U.P_WINDING_RIGHT: right, U.P_WINDING_PITCH: pitch},
+                     winding_adaptation_pu_per_stroke=1 * MM)
+    mc = link.drive.mc
+    direct(link, C.VAI_GO_TO_POS, target=left, vmax=200_000, acc=500_000, dec=500_000)
+    link.advance(500 * MS)
+    link.drive.curves.ram[9] = Curve.build(9, [0, 100], x_length=100, object_type=0x0103)
+    link.command(C.CURVE_WINDING_START, curve_id=9)
+    link.advance(2 * MS)
+    t0 = link.t
+    mc.encoder.drive_with(ConstantSpeed(16_000, t0_ns=t0), t0)      # 2 revolutions/s: 50 mm/s of travel
+    link.advance(3500 * MS)                                          # strokes 0..3 (50 + 49 + 47 + 45 mm)
+    link.command(C.WINDING_STOP_ADAPTATION)                          # during stroke 3 (it ends at 191 mm)
+    link.advance(4000 * MS)
+    got = reversals(mc.trajectory.between(t0, link.t))
+    # stroke k reverses inwards by 1 mm per stroke adapted before it; stopped from stroke 4 on (4 adapted)
+    want = [right, left + 1 * MM, right - 2 * MM, left + 3 * MM, right - 4 * MM, left + 4 * MM, right - 4 * MM]
+    assert got[:len(want)] == pytest.approx(want, abs=60), [round(x) for x in got]
+    assert mc.error_code == 0

@@ -53,6 +53,12 @@ class MotionSettings:
     # encoder count counted since the command (INFERRED)
     position_indexing_pu_per_count: float = 1.0
 
+    # winding (304h/305h adaptation, INFERRED): each stroke's reversal position moves inwards by this per stroke
+    # adapted before it, plus the disturbance amplitude x frac(k x golden ratio) (a varying reversal point
+    # against ribbon patterns); 0: fixed left/right positions
+    winding_adaptation_pu_per_stroke: float = 0.0
+    winding_disturbance_pu: float = 0.0
+
     # the force sensor (force control 380xh..385xh, [MC] 4.3.217..222; INFERRED model): a contact at this
     # position (None: nothing to press on), a spring of this stiffness beyond it (pressing towards positive
     # positions), the measured force with Gaussian noise of this standard deviation (seeded: reproducible)
