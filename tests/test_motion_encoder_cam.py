@@ -202,3 +202,30 @@ def test_the_fast_path_runs_a_cam_as_the_generic_cycle_does():
         link.advance(600 * MS)
         runs.append(d.mc.trajectory.between(t0, link.t))
     assert len(runs[0]) > 500 and runs[0] == runs[1]
+
+
+def test_triggered_cam_with_target_and_length_on_the_falling_edge():
+    link = link_with_cam({0x170C: 1})
+    mc, io = link.drive.mc, link.drive.io
+    here = round(mc.dem_p)
+    ramp = [0, 10 * MM, 30 * MM, 60 * MM, 100 * MM]
+    link.drive.curves.ram[8] = cam_curve(ramp, 4000, 8)
+    link.command(C.TRIG_CAM_FALL_TARGET_LENGTH, curve_id=8, delay=200, target=here + 30 * MM, cam_length=3000)
+    link.advance(2 * MS)
+    assert link.drive.ram(U.P_TRIG_CAM_CURVE_FALL) == 8 and link.drive.ram(U.P_TRIG_CAM_DELAY_FALL) == 200
+    t0 = link.t
+    mc.encoder.drive_with(ConstantSpeed(-10_000, t0_ns=t0), t0)       # the master turns backwards
+    mc.encoder.set_value(50_000, t0)
+    io.set_input("X4.6", 1, t0 + 10 * MS)                             # the rising edge: not armed
+    link.advance(50 * MS)
+    assert mc.dem_p == here
+    edge = t0 + 60 * MS
+    io.set_input("X4.6", 0, edge)
+    link.advance(600 * MS)
+    assert mc.dem_p == here                                           # backwards: the counter never reaches it
+    mc.encoder.drive_with(ConstantSpeed(10_000, t0_ns=link.t), link.t)   # forwards again
+    link.advance(2000 * MS)
+    start = mc.trajectory.master_counts(edge) + 200
+    assert check(link, edge, link.t, start=start, offset=here, amp=30 * MM / (100 * MM), length=3000,
+                 points=ramp) > 2000
+    assert mc.dem_p == pytest.approx(here + 30 * MM)
