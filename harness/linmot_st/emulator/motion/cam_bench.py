@@ -12,7 +12,7 @@ from ..linmot.curves import Curve
 from ..linmot.master_encoder import ConstantSpeed
 from ...protocol import commands as C
 from ...protocol import upids as U
-from .bench import MS, S, _setup
+from .bench import S, _setup
 
 SETPOINTS = [0, 100_000, 400_000, 500_000, 400_000, 100_000, 0]    # 0 -> 50 mm -> 0 over one revolution
 

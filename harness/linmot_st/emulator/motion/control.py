@@ -77,6 +77,7 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
         self.gen = Hold(self.axis.position)
         self.dem_p, self.dem_v = self.axis.position, 0.0
         self.last_vai: tuple | None = None       # (target, vmax, acc, dec) of the last VAI motion
+        self._encoder_cams = None                # cam definitions (encoder_cams.py): RAM, lost here (INFERRED)
         self.frozen: tuple | None = None
         self.after_stop: str | None = None       # what the running stop ramp ends in: "error", "off3", None
         self.warn_bits = 0

@@ -8,7 +8,8 @@ the master at any speed, forwards and backwards, and the MC's quiet cycles (fast
 
 Cam mode 1527h ([MC] 5.5): 0 infinite length (a cam runs once from its start count; triggered cams), 1 modulo
 cam length (the counter taken modulo the cam length 1529h, or counts/revolution 1291h when 0: repeated cams).
-Between cams, the demand rests where the last cam started before the counter ended (INFERRED).
+Between cams, the demand rests at the end of the cam whose start the counter passed last (INFERRED). The cam
+definitions are RAM: an MC start or stop clears them (control.py, INFERRED).
 """
 
 from __future__ import annotations
@@ -158,6 +159,8 @@ def _define(mc, c: CommandDef, f: dict, t: int, key) -> bool:
         if y[-1] == y[0]:
             return mc._fail(W.ERR_CURVE_AMP_SCALE, t)
         amp = (f["target"] - here) / (y[-1] - y[0])
+    if sub == C.CAM_DEFINE_FROM_ACT_POS:
+        here = mc.axis.position
     if sub in (C.CAM_DEFINE_FROM_ACT_POS, C.CAM_DEFINE_TO_POS, C.CAM_DEFINE_TO_POS_IN_COUNTS):
         offset = here - amp * y[0]                     # the motor stands at the cam's start ([MC] 4.3.155)
     if length <= 0 or not -20.0 <= amp <= 20.0:
