@@ -229,3 +229,23 @@ def test_triggered_cam_with_target_and_length_on_the_falling_edge():
     assert check(link, edge, link.t, start=start, offset=here, amp=30 * MM / (100 * MM), length=3000,
                  points=ramp) > 2000
     assert mc.dem_p == pytest.approx(here + 30 * MM)
+
+
+def test_the_counter_and_cam_enabled_over_sdo():
+    """1BA0h (counter) and 1BA9h (cam enabled) as a PLC reads them: SDO upload of 2000h + UPID, sub 01h."""
+    link = link_with_cam()
+    mc = link.drive.mc
+
+    def upload(upid: int) -> int:
+        index = 0x2000 + upid
+        r = link.sdo(bytes([0x40, index & 0xFF, index >> 8, 0x01, 0, 0, 0, 0]))
+        return int.from_bytes(r[4:8], "little", signed=True)
+
+    mc.encoder.drive_with(ConstantSpeed(-1000, t0_ns=link.t), link.t)
+    link.advance(100 * MS)
+    asked = link.t
+    assert upload(U.V_MASTER_ENCODER_COUNTS) == mc.encoder.counts(asked) == -100     # the counter when asked
+    assert upload(U.V_CAM_ENABLED) == 0
+    link.command(C.ENCODER_CAM_ENABLE)
+    link.advance(2 * MS)
+    assert upload(U.V_CAM_ENABLED) == 1

@@ -204,6 +204,14 @@ class MasterEncoder:
         """Counts/s at t_ns (unfiltered: the slope the cam's feedforward uses)."""
         return self._segment(t_ns)[1].rate(t_ns) * self._scale() if self.connected else 0.0
 
+    def sample(self, t_ns: int) -> tuple[int, float]:
+        """(counts, rate) at t_ns: what the followers read once per MC cycle, the parameters read once."""
+        _, signal, offset = self._segment(t_ns)
+        if not self.connected:
+            return offset, 0.0
+        scale = self._scale()
+        return math.floor(signal.counts(t_ns) * scale + 1e-6) + offset, signal.rate(t_ns) * scale
+
     def speed(self, t_ns: int) -> float:
         """Counts/s averaged over the speed filter time 1293h (in 0.1 ms: INFERRED unit)."""
         window_ns = max(self._par(P_MASTER_ENCODER_SPEED_FILTER, 10), 1) * 100_000

@@ -17,7 +17,8 @@ from .bench import S, _setup
 SETPOINTS = [0, 100_000, 400_000, 500_000, 400_000, 100_000, 0]    # 0 -> 50 mm -> 0 over one revolution
 
 
-def simulated_per_wall(seconds: float = 5.0) -> tuple[float, int]:
+def simulated_per_wall(seconds: float = 5.0) -> tuple[float, float]:
+    """One run: simulated seconds per wall second and per CPU second of this process."""
     bus, master, (drive,) = _setup(1)
     master.next_move = 1 << 62                                      # no VAI moves: the cam moves the axis
     bus.run_until(master.moves_from)
@@ -34,19 +35,21 @@ def simulated_per_wall(seconds: float = 5.0) -> tuple[float, int]:
         mc.command_image(int.from_bytes(raw[:2], "little"), raw[2:], t)
     mc.encoder.drive_with(ConstantSpeed(16_000, t0_ns=t), t)
     t_end = t + int(seconds * S)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     bus.run_until(t_end)
-    wall = time.perf_counter() - t0
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     top = max(s.demand for s in mc.trajectory.between(t, t_end))
     if mc.error_code or top < mc.trajectory.between(t, t)[0].demand + 400_000:
         raise RuntimeError(f"the cam did not run (error {mc.error_code:04X}h)")
-    return seconds / wall, len(mc.trajectory.between(t, t_end))
+    return seconds / wall, seconds / max(cpu, 1e-9)
 
 
 def run(runs: int = 3) -> list[dict]:
-    best = max(simulated_per_wall()[0] for _ in range(runs))
-    return [dict(name="cam following a master encoder: 1 drive, simulated s per wall s", value=round(best, 1),
-                 unit="x", target=None)]
+    figures = [simulated_per_wall() for _ in range(runs)]
+    return [dict(name="cam following a master encoder: 1 drive, simulated s per wall s", value=round(
+                 max(w for w, _ in figures), 1), unit="x", target=None),
+            dict(name="cam following a master encoder: 1 drive, simulated s per CPU s of this process",
+                 value=round(max(c for _, c in figures), 1), unit="x", target=None)]
 
 
 if __name__ == "__main__":

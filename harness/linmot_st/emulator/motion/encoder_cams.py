@@ -82,7 +82,8 @@ class EncoderCams:
 
     def position(self, count: int) -> tuple[float, float] | None:
         """Demand position and its slope per count at the counter value `count` (None: no cam enabled)."""
-        active = [(k, c) for k, c in self.cams.items() if self.enabled.get(k)]
+        enabled = self.enabled
+        active = [(k, c) for k, c in self.cams.items() if enabled.get(k)]
         if not active:
             return None
         modulo = self.modulo()
@@ -113,11 +114,12 @@ class CamFollower:
         self.end_ns = NEVER
 
     def at(self, t_ns: int) -> tuple[float, float, float]:
-        found = self.cams.position(self.encoder.counts(t_ns))
+        count, rate = self.encoder.sample(t_ns)
+        found = self.cams.position(count)
         if found is None:
             return self.target, 0.0, 0.0
         p, slope = found
-        return p, slope * self.encoder.rate(t_ns), 0.0
+        return p, slope * rate, 0.0
 
     def done(self, t_ns: int) -> bool:
         return False
