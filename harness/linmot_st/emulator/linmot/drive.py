@@ -117,6 +117,7 @@ class E1100Drive(NmtSlave):
         self.params.live = self.mc.variable
         self.io = DriveIO(io, par=self.mc.par)
         self._wire_io()
+        self.mc.on_reset = lambda t: self._at(t, self._start_boot)     # 00Fxh: the whole firmware restarts
         self.pdo = ProcessData(self)
         self.mc_phase = "stopped"          # stopped | starting | running | stopping
         self.comm = CommObjects(node_id, self.profile.identity, self._heartbeat_power_on_ms,

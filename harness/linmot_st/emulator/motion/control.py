@@ -30,6 +30,7 @@ from . import triggered  # noqa: F401 (registers the I/O and triggered commands'
 from .fast_path import FastPath
 from .interpreter import Interpreter
 from ..linmot.master_encoder import MasterEncoder
+from .pending import PendingMotions
 from .settings import MotionSettings
 from .setpoints import Hold
 from .state_machine import StateMachine
@@ -54,6 +55,8 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
         self.trajectory.master_encoder = self.encoder
         self.events = EventHandler(self)
         self.io = None                      # the drive's I/O (emulator/linmot/io.py), set by the drive
+        self.pending = PendingMotions()           # the queued motion and position transition (pending.py)
+        self.on_reset: Callable[[int], None] | None = None   # 00Fxh: the drive restarts (set by the drive)
         self.running = False
         self.power_on_reset()
         self._reset_state()
@@ -93,6 +96,9 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
         self._now = getattr(self, "_now", 0)
         self.ct_runner.stop()
         self.events.clear()
+        self.pending.clear()
+        self.current_limited = False             # a With Max Curr command ran: the axis limits its current
+        self.axis.current_limit_ma = None
 
     # ------------------------------------------------------------------ parameters
     def par(self, upid: int, default: int = 0) -> int:
@@ -263,6 +269,8 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
             self._prev_vd = 0.0
         self.dem_p, self.dem_v = p, v
         self._last_tick = t
+        if self.pending.armed:
+            self.pending.step(self, t)
         if self.running:
             if self.controlled:
                 self._monitor(t)
@@ -281,6 +289,7 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
         # keep cycling while anything can still change
         self._update_in_target(t)
         busy = (not self.gen.done(t) or self.ct_runner.running or axis.blocked or self.events.pending
+                or self.pending.armed
                 or (self.state in W.SPECIAL_STATES and self.sub != W.SUB_FINISHED)
                 or (self._in_window_since is not None and not self.in_target))
         if self.controlled:

@@ -42,6 +42,11 @@ class MotionSettings:
     # homed, else error 0080h ([MC] 10: "action that requires the motor to be already homed")
     motion_requires_homing: bool = True
 
+    # a VAI stop (017xh, 027xh, 097xh, 0A7xh) also drops a queued "After Actual Command" move and an armed
+    # position transition; False: only 008xh and leaving Operation Enabled do, and a move queued before the stop
+    # starts when the stop ramp ends ([MC] 4.3.134/144's mechanism taken literally; docs/emulator.md 13.3.1)
+    stop_drops_pending: bool = False
+
     # demand current (1B93h, mA) = moving mass x actual acceleration / force constant
     moving_mass_kg: float = 0.5
     force_constant_n_per_a: float = 10.0

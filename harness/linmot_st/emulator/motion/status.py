@@ -80,6 +80,8 @@ class StatusWords:
             bits |= W.SW_EVENT_HANDLER
         if s in W.SPECIAL_STATES and self.sub != W.SUB_FINISHED:
             bits |= W.SW_SPECIAL_MOTION
+        if self.pending.armed:
+            bits |= W.SW_EVENT_HANDLER
         if self.in_target:
             bits |= W.SW_IN_TARGET
         if self.homed:
@@ -116,7 +118,7 @@ class StatusWords:
                 low |= W.SV_IN_TARGET
             if self.homed:
                 low |= W.SV_HOMED
-            if self.events.armed is not None:
+            if self.events.armed is not None or self.pending.armed:
                 low |= W.SV_EVENT_HANDLER
         elif s in W.SPECIAL_STATES:
             low = self.sub
