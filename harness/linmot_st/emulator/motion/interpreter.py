@@ -201,3 +201,10 @@ HANDLERS: dict[Kind, Handler] = {
     Kind.CT_IF: ct_language.if_jump,
     Kind.VAI_CT_VAR: ct_language.vai_to_variable,
 }
+
+# the kinds of their own modules (one line each)
+from . import encoder_cams, force_control, position_indexing, winding  # noqa: E402
+HANDLERS.update(encoder_cams.HANDLERS)
+HANDLERS.update(position_indexing.HANDLERS)
+HANDLERS.update(winding.HANDLERS)
+HANDLERS.update(force_control.HANDLERS)

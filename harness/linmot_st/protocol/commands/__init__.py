@@ -29,6 +29,8 @@ from .system_mc import *  # noqa: F401,F403
 from .ct_language import *  # noqa: F401,F403
 from .io import *  # noqa: F401,F403
 from .triggered import *  # noqa: F401,F403
+from .encoder_cam import *  # noqa: F401,F403
+from .encoder_sync import *  # noqa: F401,F403
 
 
 def command_id(header: int) -> int:
