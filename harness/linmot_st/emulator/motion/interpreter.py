@@ -18,7 +18,9 @@ from ...protocol.upids import (
     P_CURVE_AMPLITUDE, P_CURVE_OFFSET, P_CURVE_TIME_SCALE, P_HOME_POSITION, P_PREDEF_ACC, P_PREDEF_DEC,
     P_PREDEF_VMAX, P_QUICK_STOP_DEC, P_SCALE_ACC, P_SCALE_POS, P_SCALE_VEL,
 )
+from .curve_modify import modify_curve
 from .setpoints import CurvePlan, StopPlan, VaPlan
+from .stream import stop_streaming, stream_setpoint
 from .units import ACC_RAW, VEL_RAW
 
 Handler = Callable[["Interpreter", CommandDef, dict, int], bool]     # (mc, row, field values, t) -> no error
@@ -176,4 +178,7 @@ HANDLERS: dict[Kind, Handler] = {
     Kind.VAI_16BIT: _vai,
     Kind.PREDEF_VAI: _vai,
     Kind.TIME_CURVE: _time_curve,
+    Kind.STREAM: stream_setpoint,
+    Kind.STREAM_STOP: stop_streaming,
+    Kind.CURVE_MODIFY: modify_curve,
 }

@@ -49,6 +49,11 @@ class MotionSettings:
     # the trajectory record (drive.mc.trajectory): one sample per MC cycle and per event
     record_trajectory: bool = True
 
+    # streams ([MC] 5.4): setpoints received but not yet played that the drive holds; one more is a buffer
+    # overflow (0082h). The manual names the error, not the size: 4 is INFERRED (a strictly cyclic master
+    # keeps 1..2 ahead with the 1.5-period delay)
+    stream_buffer_points: int = 4
+
     # run quiet cycles (plain motion) in a tight loop and ahead of the bus: a speed-up with the same results
     # (tests/test_motion_equivalence.py); False runs every cycle through the generic path
     quiet_cycles: bool = True

@@ -28,6 +28,9 @@ class Kind(enum.Enum):
     TIME_CURVE = "time curve from the curve RAM"
     COMMAND_TABLE = "command-table control"
     WAIT = "command-table wait (acts only inside a command-table sequence)"
+    STREAM = "P / PV / PVA stream setpoint with slave-generated time stamp"
+    STREAM_STOP = "leave the streaming mode"
+    CURVE_MODIFY = "patch a curve's start address, info block or data block in RAM"
 
 
 class Start(enum.Enum):
