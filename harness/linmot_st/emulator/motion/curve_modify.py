@@ -29,12 +29,11 @@ def modify_curve(mc, c: CommandDef, f: dict, t: int) -> bool:
         return True
     if curve is None:
         return mc._fail(W.ERR_CURVE_NOT_DEFINED, t)
-    if "value2" in f:
-        patch = struct.pack("<ii", f["value"], f["value2"])
-    elif c.fields[-1].type == "INT":
+    if c.fields[-1].type == "INT":
         patch = struct.pack("<h", f["value"])
-    else:
-        patch = struct.pack("<i", f["value"])
+    else:                               # one, two or three SInt32 (054xh, 055xh; 056xh once it has a row)
+        values = [f[n] for n in ("value", "value2", "value3") if n in f]
+        patch = struct.pack(f"<{len(values)}i", *values)
     block = C.CURVE_MODIFY_BLOCK[c.cid]
     old = curve.info if block == "info" else curve.data
     at = f["offset"]
