@@ -152,6 +152,8 @@ def test_a_stream_that_stops_is_a_buffer_underflow():
     # found in the MC cycle where the last setpoint had played (1.5 periods after its SYNC)
     errs = [s for s in mc.trajectory.between(t_first) if s.state == W.ERROR_QUICK_STOP or s.state == W.ERROR]
     assert t_last + 3 * MS <= errs[0].t_ns <= t_last + 4 * MS
+    # the stream was moving (about 60 mm/s): the quick stop brakes from its last velocity, then state 4
+    assert errs[0].state == W.ERROR_QUICK_STOP and abs(errs[0].demand_velocity) > 400_000
 
 
 @pytest.mark.parametrize("period_ms, code", [(1, W.ERR_PVT_MASTER_TOO_FAST), (6, W.ERR_PVT_MASTER_TOO_SLOW)])

@@ -53,6 +53,7 @@ class StreamPlan:
         self._first_stamp = origin_ns
         self._before = self._hold = (float(p0), 0.0, 0.0)   # before the first setpoint plays; after the last
         self._last_v = 0.0
+        self._end_v = 0.0
 
     # ---------------------------------------------------------------- setpoints in
     def add(self, stamp: int, p: float, v: float | None, a: float | None) -> None:
@@ -108,6 +109,7 @@ class StreamPlan:
             del self._starts[:_KEEP], self._ends[:_KEEP], self._coef[:_KEEP]
         self.end_ns = t1
         self._hold = (p1, 0.0, 0.0)
+        self._end_v = (c[1] + 2 * c[2] + 3 * c[3] + 4 * c[4] + 5 * c[5]) / h     # the velocity it ends with
 
     def pending(self, t: int) -> int:
         """Setpoints received that have not begun to play at t (all of them before the period is known)."""
@@ -123,7 +125,12 @@ class StreamPlan:
         if t_ns < starts[0]:
             return self._before
         if t_ns >= self.end_ns:
-            return self._hold
+            if self.stopped:
+                return self._hold
+            # no newer setpoint (the cycle that finds the underflow): on at the last velocity, so that the
+            # quick stop brakes from it
+            v = self._end_v
+            return self._hold[0] + v * (t_ns - self.end_ns) * NS, v, 0.0
         i = bisect_right(starts, t_ns) - 1
         return self._eval(i, t_ns)
 
