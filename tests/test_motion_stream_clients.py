@@ -114,7 +114,8 @@ def test_canopen_sends_a_pv_stream_with_sync(served):
         # how late each setpoint reached the drive's thread on the configured timeline (the first one's stamp +
         # k periods), the one that did not come before the drive stopped included
         late = max(t - (stamps[0] + k * period) for k, t in enumerate(stamps + failed[:1]))
-        first_gap = stamps[1] - stamps[0] if len(stamps) >= 2 else None
+        # the first two setpoints' distance (or, where the drive stopped before the second, at least this)
+        first_gap = stamps[1] - stamps[0] if len(stamps) >= 2 else (failed[0] - stamps[0] if failed else None)
         if (mc.error_code == 0x0083 and late > period // 2) or (
                 mc.error_code in (0x0084, 0x0085) and first_gap is not None
                 and not 400_000 <= first_gap <= 10_000_000):
