@@ -7,7 +7,7 @@ import struct
 
 import pytest
 
-from linmot_st.emulator import DriveTimings, E1100Drive, load_profile
+from linmot_st.emulator import DriveTimings, E1100Drive, build_entry, load_profile
 from linmot_st.emulator.linmot.curves import Curve
 from linmot_st.emulator.testing import MotionLink
 from linmot_st.protocol import commands as C
@@ -32,10 +32,11 @@ def homed_link() -> MotionLink:
 
 
 def test_the_group_is_complete():
-    assert ROWS == [0x030, 0x031, 0x032, 0x033, 0x034, 0x035, 0x03F, 0x050, 0x051, 0x052, 0x054, 0x055]
+    assert ROWS == [0x030, 0x031, 0x032, 0x033, 0x034, 0x035, 0x03F, 0x050, 0x051, 0x052, 0x054, 0x055, 0x056]
     # what each needs on CANopen: the PVA setpoints and the 64-bit patch fill RxPDO3 up to par byte 11
     assert {cid for cid in ROWS if C.COMMANDS[cid].transport is C.Transport.RXPDO3} == {
         0x031, 0x033, 0x034, 0x035, 0x052, 0x054, 0x055}
+    assert C.COMMANDS[0x056].transport is C.Transport.COMMAND_TABLE        # 16 bytes
 
 
 @pytest.mark.parametrize("cid", ROWS, ids=lambda cid: f"{cid:03X}h")
@@ -48,6 +49,13 @@ def test_every_row_is_accepted_by_the_drive(cid):
     if "position" in fields:
         fields["position"] = round(mc.axis.position)
     t0 = link.t
+    if C.COMMANDS[cid].transport is C.Transport.COMMAND_TABLE:      # beyond the PDOs: an entry, run by 200xh
+        link.drive.ct.ram[9] = build_entry(cid << 4, C.encode(cid, 0, **fields)[2:])
+        link.command(C.START_COMMAND_TABLE, entry=9)
+        link.advance(MS)
+        assert [h >> 4 for t, h, _ in mc.executed if t >= t0] == [C.START_COMMAND_TABLE, cid]
+        assert mc.error_code == 0
+        return
     link.command(cid, **fields)
     link.advance(MS)
     assert [h >> 4 for t, h, _ in mc.executed if t >= t0] == [cid]
@@ -66,6 +74,16 @@ def test_data_block_patches_change_the_curve_that_runs():
     link.command(C.TIME_CURVE, curve_id=2)
     link.advance(300 * MS)
     assert mc.error_code == 0 and abs(mc.axis.position - 40 * MM) < 20
+
+
+def test_a_96_bit_patch_travels_as_a_command_table_entry():
+    """056xh has 16 parameter bytes: more than RxPDO2 + RxPDO3 carry, so an entry holds it and 200xh runs it."""
+    link = homed_link()
+    link.drive.ct.ram[3] = build_entry(C.MODIFY_CURVE_DATA_96 << 4, C.encode(
+        C.MODIFY_CURVE_DATA_96, 0, curve_id=2, offset=4, value=1, value2=2, value3=3)[2:])
+    link.command(C.START_COMMAND_TABLE, entry=3)
+    link.advance(5 * MS)
+    assert link.drive.mc.error_code == 0 and link.drive.curves.ram[2].setpoints == [0, 1, 2, 3]
 
 
 def test_info_block_patches_set_the_x_length_word_by_word():

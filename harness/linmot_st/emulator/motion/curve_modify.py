@@ -1,4 +1,4 @@
-"""Modify Curve in RAM (050xh..055xh; [MC] 4.3.57..61): the handler of the catalogue's kind CURVE_MODIFY. It
+"""Modify Curve in RAM (050xh..056xh; [MC] 4.3.57..62): the handler of the catalogue's kind CURVE_MODIFY. It
 patches a curve of the drive's curve RAM (linmot/curves.py) in place, as the real drive writes into its curve
 memory; the curve service (SDO) remains the checked way.
 

@@ -1,9 +1,8 @@
 """Modify Curve in RAM (seed 004 4.2 master ID 05h; [MC] 4.3.57..62): patch a curve's start address, its
 70-byte info block or its data block in the drive's curve RAM, bypassing the curve service. The byte offset
 counts from the start of the block; values are little endian as the curve service writes them.
-
-056xh (three SInt32 values, 16 parameter bytes) is not in the catalogue yet: its five parameters exceed the
-ST encoder's four (A..D), and on CANopen it travels only as a command-table entry (docs/motion.md)."""
+056xh (three SInt32 values, 16 parameter bytes) travels on CANopen only as a command-table entry
+(docs/motion.md); its five parameters are the ST encoder's A..E."""
 
 from __future__ import annotations
 
@@ -14,6 +13,7 @@ MODIFY_CURVE_INFO_16 = 0x051
 MODIFY_CURVE_INFO_32 = 0x052
 MODIFY_CURVE_DATA_32 = 0x054
 MODIFY_CURVE_DATA_64 = 0x055
+MODIFY_CURVE_DATA_96 = 0x056
 
 _ID = Field("curve_id", "UINT")
 _OFFSET = Field("offset", "UINT", "byte")
@@ -21,7 +21,7 @@ _OFFSET = Field("offset", "UINT", "byte")
 # which block each command writes ([MC] 4.3.59's title says info block, its text data block: the title is
 # taken, as 051h's and the TOC's "Info Block" agree with it; spec/linmot-motion-commands.md 1c)
 CURVE_MODIFY_BLOCK = {MODIFY_CURVE_INFO_16: "info", MODIFY_CURVE_INFO_32: "info", MODIFY_CURVE_DATA_32: "data",
-         MODIFY_CURVE_DATA_64: "data"}
+         MODIFY_CURVE_DATA_64: "data", MODIFY_CURVE_DATA_96: "data"}
 
 
 def _modify(cid, name, fields, mc):
@@ -39,4 +39,6 @@ register(
             (_ID, _OFFSET, Field("value", "DINT")), 60),
     _modify(MODIFY_CURVE_DATA_64, "Modify Curve Data Block 64 Bit Value in RAM",
             (_ID, _OFFSET, Field("value", "DINT"), Field("value2", "DINT")), 61),
+    _modify(MODIFY_CURVE_DATA_96, "Modify Curve Data Block 96 Bit Value in RAM",
+            (_ID, _OFFSET, Field("value", "DINT"), Field("value2", "DINT"), Field("value3", "DINT")), 62),
 )

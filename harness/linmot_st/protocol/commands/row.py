@@ -128,6 +128,6 @@ def register(*rows: CommandDef) -> None:
     for c in rows:
         if c.cid in COMMANDS:
             raise ValueError(f"motion command {c.cid:03X}h registered twice")
-        if len(c.fields) > 4:
-            raise ValueError(f"{c.cid:03X}h: the ST encoder takes at most 4 parameters (A..D)")
+        if len(c.fields) > 5:
+            raise ValueError(f"{c.cid:03X}h: the ST encoder takes at most 5 parameters (A..E)")
         COMMANDS[c.cid] = c
