@@ -24,6 +24,7 @@ P_CW_COPY_MASK, P_CW_FORCE_MASK, P_CW_FORCE_VALUES = 0x1700, 0x1701, 0x1702   # 
 P_RANGE1_UPID, P_RANGE1_MIN, P_RANGE1_MAX = 0x1780, 0x1781, 0x1782   # INVENTED (1710h is [MC] 7.2.2's fall delay)
 P_ACTIVE_CONTROLLER_SET = 0x1393                                     # [MC] 4.3.5 (005xh writes it)
 P_MAX_CURRENT_SET_A, P_MAX_CURRENT_SET_B = 0x13A6, 0x13BA            # [MC] 4.3.114..116, 7.2.1.2
+P_STREAM_PERIOD = 0x14E6                                             # [MC] 4.3.40/41/43, 5.4
 P_READY_TO_OPERATE_MODE = 0x6300                                     # [S004] 3.7, [MC] 3.7
 
 # the variables the MC publishes (read by SDO as UPID RAM values, mapped into TxPDOs)

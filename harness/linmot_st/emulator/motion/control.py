@@ -35,6 +35,7 @@ from .settings import MotionSettings
 from .setpoints import Hold
 from .state_machine import StateMachine
 from .status import StatusWords
+from .stream import check as stream_check
 from .trajectory import Sample, Trajectory
 
 
@@ -282,6 +283,8 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
                 self.events.step(t)
             if self.ct_runner.running:
                 self.ct_runner.step(t)
+            if self.controlled and self.gen.kind == "stream":
+                stream_check(self, t)      # underflow, a master too slow
             if self.after_stop is not None and self.gen.done(t):
                 then, self.after_stop = self.after_stop, None
                 if then == "error":

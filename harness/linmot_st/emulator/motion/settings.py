@@ -81,6 +81,10 @@ class MotionSettings:
     # the force controller: the demand moves by gain x (target - measured force) per second (pu/(N s)); with
     # the default stiffness the loop settles with a time constant of 1 / (gain x stiffness) = 20 ms
     force_control_gain_pu_per_n_s: float = 50_000.0
+    # streams ([MC] 5.4): setpoints received but not yet played that the drive holds; one more is a buffer
+    # overflow (0082h). The manual names the error, not the size: 4 is INFERRED (a strictly cyclic master
+    # keeps 1..2 ahead with the 1.5-period delay)
+    stream_buffer_points: int = 4
 
     # run quiet cycles (plain motion) in a tight loop and ahead of the bus: a speed-up with the same results
     # (tests/test_motion_equivalence.py); False runs every cycle through the generic path

@@ -31,6 +31,8 @@ from .io import *  # noqa: F401,F403
 from .triggered import *  # noqa: F401,F403
 from .encoder_cam import *  # noqa: F401,F403
 from .encoder_sync import *  # noqa: F401,F403
+from .streams import *  # noqa: F401,F403
+from .curve_modify import *  # noqa: F401,F403
 
 
 def command_id(header: int) -> int:

@@ -49,6 +49,9 @@ class Kind(enum.Enum):
     CT_VARIABLE = "set, add to, store or load a command-table variable"
     CT_IF = "command-table IF: a two-way jump on a condition"
     VAI_CT_VAR = "VAI to the position held in a command-table variable"
+    STREAM = "P / PV / PVA stream setpoint with slave-generated time stamp"
+    STREAM_STOP = "leave the streaming mode"
+    CURVE_MODIFY = "patch a curve's start address, info block or data block in RAM"
 
 
 class Start(enum.Enum):
@@ -151,6 +154,6 @@ def register(*rows: CommandDef) -> None:
     for c in rows:
         if c.cid in COMMANDS:
             raise ValueError(f"motion command {c.cid:03X}h registered twice")
-        if len(c.fields) > 4:
-            raise ValueError(f"{c.cid:03X}h: the ST encoder takes at most 4 parameters (A..D)")
+        if len(c.fields) > 5:
+            raise ValueError(f"{c.cid:03X}h: the ST encoder takes at most 5 parameters (A..E)")
         COMMANDS[c.cid] = c
