@@ -10,7 +10,7 @@ from linmot_st.cli import main
 from linmot_st.commission.testing import EXAMPLE, commission, example
 from linmot_st.emulator import DriveTimings, E1100Drive
 from linmot_st.emulator.linmot.curves import Curve
-from linmot_st.errors import BY_NAME
+from linmot_st.protocol.errors import BY_NAME
 from linmot_st.pvl.dataset import INFO_WORDS, from_pvl
 
 DS = from_pvl(example())

@@ -7,7 +7,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from linmot_st import errors
+from linmot_st.protocol import errors
 from linmot_st.pvl import dataset as dsf
 
 REPO = Path(__file__).resolve().parents[1]
@@ -15,7 +15,7 @@ ST = REPO / "st_lib" / "commission"
 
 
 def test_commissioning_error_ids_are_in_the_library_table():
-    # one table for every ErrorID (tests/test_stlib_errors.py checks the generated ST and docs against it)
+    # one table for every ErrorID (tests/test_protocol_generate.py checks the generated ST and docs against it)
     assert errors.describe(0x0603).startswith("16#0603 read-back differs")
     assert errors.name_of(0x0602) == "ResetNeedsFlash"
     assert {"DatasetInvalid", "ResetNeedsFlash", "VerifyMismatch"} <= set(errors.BY_NAME)

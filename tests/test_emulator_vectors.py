@@ -75,10 +75,10 @@ def coverage(exchanges) -> tuple[set[int], set[int], set[int]]:
 
 
 def emulator_codes() -> tuple[set[int], set[int], set[int]]:
-    from linmot_st.emulator import codes
+    from linmot_st.protocol import codes
     from linmot_st.emulator.linmot.manufacturer import E1100_SERVICES
 
-    return {s.sub for s in E1100_SERVICES}, set(codes.RESULT_NAMES), set(codes.ABORT_NAMES)
+    return {s.sub for s in E1100_SERVICES}, set(codes.RESULT_NAMES), set(codes.DRIVE_ABORTS)
 
 
 def test_every_vector_names_a_known_drive_setup():

@@ -12,7 +12,7 @@ from stbench import Bench  # noqa: E402
 
 from linmot_st.bus.frame import Frame  # noqa: E402
 from linmot_st.emulator import DriveTimings, build_entry, load_profile  # noqa: E402
-from linmot_st.emulator.motion import commands as C  # noqa: E402
+from linmot_st.protocol import commands as C  # noqa: E402
 
 MS = 1_000_000
 MM = 10_000

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from linmot_st.emulator import Curve, E1100Drive, DriveTimings, load_profile
-from linmot_st.emulator.motion import commands as C
+from linmot_st.protocol import commands as C
 from linmot_st.emulator.testing import MotionLink
 from linmot_st.pvl import load_pvl
 

@@ -12,7 +12,7 @@ from linmot_st.bus import Frame, SimBus
 from linmot_st.bus.nodes import ScriptedNode
 from linmot_st.emulator import DriveTimings, E1100Drive, load_profile
 from linmot_st.emulator.motion import MotionSettings
-from linmot_st.emulator.motion import commands as C
+from linmot_st.protocol import commands as C
 
 MS = 1_000_000
 MM = 10_000

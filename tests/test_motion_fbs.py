@@ -20,8 +20,8 @@ from stbench import VECTORS  # noqa: E402
 
 from linmot_st.bus import Frame  # noqa: E402
 from linmot_st.emulator import Curve, build_entry  # noqa: E402
-from linmot_st.emulator.motion import commands as C  # noqa: E402
-from linmot_st.errors import BY_NAME  # noqa: E402
+from linmot_st.protocol import commands as C  # noqa: E402
+from linmot_st.protocol.errors import BY_NAME  # noqa: E402
 from linmot_st.pvl import load_pvl  # noqa: E402
 
 E = {name: e.value for name, e in BY_NAME.items()}
@@ -528,6 +528,26 @@ def test_sync_mode_with_the_librarys_sync_producer():
     assert len(tx1) >= len(syncs) - 2 and 0.9 <= len(syncs) / ((b.plc.time_ns - t0) / (2 * MS)) <= 1.1
     b.step(100)                                                    # a resting drive keeps sending on SYNC
     assert b["MO1.VALID"]
+
+
+def test_sync_every_nth_sync():
+    """SyncEvery n: transmission type n (1800h/1801h sub 2), the TxPDOs every n-th SYNC (CiA 301); 0 is refused
+    before any frame (InvalidMode)."""
+    b = MotionBench(nodes=1, pdo={"PDOTIMEOUT": 50 * MS})
+    t0 = b.plc.time_ns
+    r = b.fb("SETUP").run(MODE="LM_PDO_SYNC", EVENTTIMERMS=0, SYNCEVERY=0)
+    assert r.error and r.error_id == E["InvalidMode"], r
+    assert not [e for e in b.bus.trace if e.start_ns >= t0 and e.frame.can_id in (0x000, 0x601)]
+    b["SYNC.PERIOD"] = 2 * MS
+    b["SYNC.ENABLE"] = True
+    r = b.fb("SETUP").run(MODE="LM_PDO_SYNC", EVENTTIMERMS=0, SYNCEVERY=3)
+    assert r.done, r
+    assert [c.ttype for c in b.drive.pdo.tx][:2] == [3, 3]
+    t0 = b.plc.time_ns
+    b.step(300)
+    tx1 = [e for e in b.bus.trace if e.frame.can_id == 0x181 and e.start_ns >= t0]
+    syncs = [e for e in b.bus.trace if e.frame.can_id == 0x080 and e.start_ns >= t0]
+    assert abs(len(tx1) - len(syncs) / 3) <= 1 and b["MO1.VALID"]
 
 
 # ---------------------------------------------------------------- both backends, the same frames

@@ -11,7 +11,7 @@ import pytest
 
 from linmot_st.bus.frame import Frame
 from linmot_st.emulator import E1100Drive, DriveTimings, load_profile
-from linmot_st.emulator.motion import commands as C
+from linmot_st.protocol import commands as C
 from linmot_st.emulator.testing import MotionLink
 
 MS = 1_000_000

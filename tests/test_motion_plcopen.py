@@ -21,7 +21,7 @@ from plcopen_checks import (assert_exclusive, check_done_held, check_one_scan_pu
                             outputs, run_recording)
 
 from linmot_st.emulator import Curve, build_entry  # noqa: E402
-from linmot_st.emulator.motion import commands as C  # noqa: E402
+from linmot_st.protocol import commands as C  # noqa: E402
 
 MS = 1_000_000
 MOVE = dict(VELOCITY=1000.0, ACCELERATION=10000.0, DECELERATION=10000.0)

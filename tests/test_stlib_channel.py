@@ -13,7 +13,7 @@ sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
 from stbench import Bench, exchanges  # noqa: E402
 
 from linmot_st.bus import Frame  # noqa: E402
-from linmot_st.errors import BY_NAME  # noqa: E402
+from linmot_st.protocol.errors import BY_NAME  # noqa: E402
 
 E = {name: e.value for name, e in BY_NAME.items()}
 LIVE = 0x1005

@@ -11,7 +11,7 @@ sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
 from stbench import Bench, exchanges  # noqa: E402
 
 from linmot_st.emulator import build_entry  # noqa: E402
-from linmot_st.errors import BY_NAME  # noqa: E402
+from linmot_st.protocol.errors import BY_NAME  # noqa: E402
 
 E = {name: e.value for name, e in BY_NAME.items()}
 PARS = bytes(range(0x10, 0x30))

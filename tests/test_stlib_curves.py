@@ -13,7 +13,7 @@ import pytest
 sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
 from stbench import VECTORS, Bench, exchanges  # noqa: E402
 
-from linmot_st.errors import BY_NAME  # noqa: E402
+from linmot_st.protocol.errors import BY_NAME  # noqa: E402
 
 E = {name: e.value for name, e in BY_NAME.items()}
 CURVES = json.loads((VECTORS / "curve_info.json").read_text())["curves"]

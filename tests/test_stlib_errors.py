@@ -1,6 +1,6 @@
-"""The ErrorID numbers: one table (linmot_st.errors) from which st_lib/types/errors.st and the table in
-docs/st-library.md are generated; this test fails when they diverge, and checks the numbers the compiled
-library actually holds."""
+"""The ErrorID numbers: one table (linmot_st.protocol.errors) from which st_lib/types/errors.st and the table
+in docs/st-library.md are generated (tests/test_protocol_generate.py checks that they are current); this test
+checks the numbers the compiled library actually holds."""
 
 from __future__ import annotations
 
@@ -10,15 +10,11 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
 from stbench import bench_build  # noqa: E402
 
-from linmot_st import errors  # noqa: E402
-
-
-def test_generated_files_match_the_table():
-    assert errors.check() == [], "run: python -m linmot_st.errors --write"
+from linmot_st.protocol import errors, generate  # noqa: E402
 
 
 def test_st_file_holds_every_number():
-    parsed = errors.parse_st(errors.ST_FILE.read_text())
+    parsed = generate.parse_st((generate.REPO / "st_lib/types/errors.st").read_text())
     assert parsed == {e.name: e.value for e in errors.ERRORS}
 
 
@@ -51,10 +47,10 @@ def test_drive_error_table_generates_the_st_constants():
     """T_LmDriveErrors / F_LmDriveErrorText come from the drive's error table (emulator/data), which the emulator
     answers its error texts from and takes its fatal codes from: one table for the drive and the library."""
     from linmot_st.emulator import load_profile
-    from linmot_st.emulator.motion import words
+    from linmot_st.protocol import words
 
-    text = errors.DRIVE_ST_FILE.read_text()
-    assert text == errors.render_drive_st()
+    text = (generate.REPO / "st_lib/motion/drive_errors.st").read_text()
+    assert text == generate.render_drive_st()
     for d in errors.DRIVE_ERRORS:
         assert f"{d.name.ljust(1)}" in text and f"16#{d.code:04X}" in text
     assert load_profile().error_texts == {d.code: d.text for d in errors.DRIVE_ERRORS}

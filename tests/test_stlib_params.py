@@ -12,7 +12,7 @@ import pytest
 sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
 from stbench import VECTORS, Bench, exchanges  # noqa: E402
 
-from linmot_st.errors import BY_NAME  # noqa: E402
+from linmot_st.protocol.errors import BY_NAME  # noqa: E402
 
 E = {name: e.value for name, e in BY_NAME.items()}
 ABORT_READ_ONLY, ABORT_RANGE, ABORT_NO_OBJECT, ABORT_UNSUPPORTED = 0x06010002, 0x06090030, 0x06020000, 0x06010000

@@ -13,7 +13,7 @@ import pytest
 sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
 from stbench import Bench  # noqa: E402
 
-from linmot_st.errors import BY_NAME  # noqa: E402
+from linmot_st.protocol.errors import BY_NAME  # noqa: E402
 
 E = {name: e.value for name, e in BY_NAME.items()}
 MS = 1_000_000

@@ -6,7 +6,7 @@ emulated drive (node 1, pyproject.toml); docs/testing.md of linmot-st lists the 
 
 import pytest
 
-from linmot_st.errors import name_of
+from linmot_st.protocol.errors import name_of
 from linmot_st.pvl import load_pvl
 from linmot_st.pvl.to_st import to_st
 

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from linmot_st.bus.bits import bus_bits, unstuffed_bus_bits
-from linmot_st.errors import describe
+from linmot_st.protocol.errors import describe
 from linmot_st.pvl.dataset import Dataset, expected_exchanges
 from .plots import ReadBack, curve_read_backs
 from .runner import RunResult

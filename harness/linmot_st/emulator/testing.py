@@ -234,7 +234,7 @@ class MotionLink(DirectLink):
         """RxPDO2 (header + par bytes 0..5) and RxPDO3 (slave header + par bytes 6..7, 6..9 or 6..11 as the
         drive's RxPDO3 mapping 2041h says) of a command with the next count (1..15, 0 skipped as LinMot's own
         demo does)."""
-        from .motion.commands import encode
+        from ..protocol.commands import encode
 
         self.count = self.count % 15 + 1
         raw = encode(cid, self.count, **fields).ljust(14, b"\0")

@@ -59,6 +59,7 @@ def measure(axes: int, fast_idle: bool = True, report: Path | None = None, c_sha
     from linmot_st.cli import build_parser
     from linmot_st.commission.cli import commission_report, prepare_run, write_outputs
 
+    from .budget import job_budget
     from .check import check_motion
     from .cli import command_line
     from .job import motion_phase, run
@@ -73,7 +74,7 @@ def measure(axes: int, fast_idle: bool = True, report: Path | None = None, c_sha
     steps = make_plan(prep.pvl, 50.0)
     opts = dataclasses.replace(prep.opts, fast_idle=fast_idle)
     idle = []
-    motion = motion_phase(steps, 120.0)
+    motion = motion_phase(steps, 120.0, inhibit_100us=job_budget(axes, opts.bitrate)[1].interval_100us)
 
     def after(plc, sim, drives):
         out = motion(plc, sim, drives)
@@ -97,6 +98,48 @@ def measure(axes: int, fast_idle: bool = True, report: Path | None = None, c_sha
         MotionReport(res.after, check_motion(res.after, steps, res.drives), res.trace, res.drives).write(report)
         out["report_s"] = time.perf_counter() - t0
     return out
+
+
+def capacity(bitrate: int, share_percent: float = 70.0) -> dict:
+    """The most axes the bus budget admits at this bit rate (at most plc_project's 32), moved by the job: whether
+    it passed, and the load after the PDO setup (mean, busiest 100 ms). Fast drive timings (the commissioning's
+    speed does not matter here)."""
+    from linmot_st.commission.project import MAX_AXES, build_project, prepare
+    from linmot_st.commission.runner import RunOptions
+    from linmot_st.pvl import load_pvl
+
+    from .budget import job_inputs, plan_budget
+    from .check import check_motion
+    from .job import run_job
+    from .plan import plan as make_plan
+
+    axes = max(n for n in range(1, MAX_AXES + 1) if plan_budget(job_inputs(n, bitrate, share_percent)).fits)
+    budget = plan_budget(job_inputs(axes, bitrate, share_percent))
+    pvl = load_pvl(EXAMPLE)
+    steps = make_plan(pvl, 50.0)
+    res = run_job(pvl, RunOptions(axes=axes, bitrate=bitrate, timings="fast"), build_project(prepare(pvl, EXAMPLE.name)),
+                  steps, inhibit_100us=budget.interval_100us)
+    m = res.after
+    passed = m is not None and m.finished and check_motion(m, steps, res.drives).passed
+    mean, peak = m.bus_load if m is not None and m.bus_load else (0.0, 0.0)
+    refused = None if axes == MAX_AXES else plan_budget(job_inputs(axes + 1, bitrate, share_percent))
+    return dict(axes=axes, passed=passed, inhibit_ms=budget.interval_100us / 10, planned=budget.load_permille / 10,
+                mean=100 * mean, peak=100 * peak, refused=refused)
+
+
+def capacity_rows() -> list[dict]:
+    rows = []
+    for bitrate, target in ((500_000, None), (1_000_000, ">= 32")):
+        c = capacity(bitrate)
+        more = (f"; {c['axes'] + 1} refused: {c['refused'].frames_needed:,} frames/s needed, "
+                f"{c['refused'].frames_available:,} available" if c["refused"] else "; 32 is plc_project's maximum")
+        rows.append(dict(name=f"motion job at {bitrate // 1000} kbit/s: most axes that move with the job passing "
+                              f"({'passed' if c['passed'] else 'FAILED'}; TxPDO2 inhibit {c['inhibit_ms']:g} ms{more})",
+                         value=c["axes"] if c["passed"] else "failed", unit="axes", target=target))
+        rows.append(dict(name=f"motion job at {bitrate // 1000} kbit/s, {c['axes']} axes: bus load after the PDO setup, "
+                              f"busiest 100 ms (mean {c['mean']:.1f} %, planned {c['planned']:g} %)",
+                         value=round(c["peak"], 1), unit="%", target="<= 70"))
+    return rows
 
 
 def run() -> list[dict]:
@@ -127,7 +170,7 @@ def run() -> list[dict]:
         rep = measure(2, report=Path(tmp) / "report")
     rows.append(dict(name="`make demo` reports and plots written (--report), 2 axes", value=round(rep["report_s"], 2),
                      unit="s", target=None))
-    return rows
+    return rows + capacity_rows()
 
 
 if __name__ == "__main__":

@@ -13,7 +13,8 @@ from __future__ import annotations
 import struct
 from dataclasses import dataclass, field
 
-from linmot_st.emulator.motion import commands as C
+from linmot_st.protocol import commands as C
+from linmot_st.protocol import words as W
 
 from .plan import (CURVE_ACTUAL_TOLERANCE_MM, CURVE_DEMAND_TOLERANCE_MM, MM, POSITION_TOLERANCE_MM, Plan)
 
@@ -83,7 +84,7 @@ def check_motion(result, plan: Plan, drives: dict) -> MotionCheck:
             elif step.kind == "curve":
                 out.steps.append(_check_curve(ax, rec, step, drive))
             elif step.kind == "home":
-                ok = any(s.status_word & 0x0800 for s in around)
+                ok = any(s.status_word & W.SW_HOMED for s in around)
                 out.steps.append(StepCheck(ax.axis, rec.index, "home", ok, "homed" if ok else "not homed"))
             elif step.kind == "power":
                 s = next((s for s in around if s.state >= 8), end)

@@ -25,7 +25,17 @@ def register(subparsers) -> None:
     add_run_arguments(p, timings_default="default: fast")
     p.add_argument("--position", type=float, default=50.0, metavar="MM",
                    help="the position of the move step, mm (default 50)")
+    p.add_argument("--bus-share", type=_share, default=70.0, metavar="PCT",
+                   help="the share of the bus the planned process data may use, %% (default 70): the job sets "
+                        "TxPDO2's inhibit time to stay within it and refuses a configuration that cannot")
     p.set_defaults(func=run_command)
+
+
+def _share(text: str) -> float:
+    v = float(text)
+    if not 1.0 <= v <= 100.0:
+        raise argparse.ArgumentTypeError(f"{text}: a share of the bus in % (1..100)")
+    return v
 
 
 def command_line(args: argparse.Namespace) -> str:
@@ -34,7 +44,8 @@ def command_line(args: argparse.Namespace) -> str:
     line = commission_line(argparse.Namespace(**{**vars(args), "live_ram": False, "flash": True, "reset": True,
                                                  "verify": True, "emulate": True}))
     line = line.replace("linmot-st commission", "linmot-st motion", 1)
-    return line + (f" --position {args.position:g}" if args.position != 50.0 else "")
+    line += f" --position {args.position:g}" if args.position != 50.0 else ""
+    return line + (f" --bus-share {args.bus_share:g}" if args.bus_share != 70.0 else "")
 
 
 def run_command(args: argparse.Namespace) -> int:
@@ -57,6 +68,12 @@ def run_command(args: argparse.Namespace) -> int:
     prep = prepare_run(args, timings=args.drive_timings or "fast")
     if isinstance(prep, int):
         return prep
+    from .budget import BudgetRefused, job_budget
+    try:                                    # before any motion: the PDOs of every axis must fit the bus
+        budget_in, budget = job_budget(prep.opts.axes, prep.opts.bitrate, args.bus_share)
+    except BudgetRefused as e:
+        print(f"linmot-st motion: refused: {e}", file=err)
+        return 1
     plan = make_plan(prep.pvl, args.position)
     if not args.quiet:
         print(f"built {prep.rel} with {prep.build.backend} "
@@ -67,7 +84,7 @@ def run_command(args: argparse.Namespace) -> int:
     try:
         result = run_job(prep.pvl, prep.opts, prep.build, plan, dataset=prep.dataset, progress=progress,
                          motion_progress=None if args.quiet else MotionProgress(err),
-                         timeout_s=args.timeout or 120.0)
+                         timeout_s=args.timeout or 120.0, inhibit_100us=budget.interval_100us)
     except (ValueError, OSError) as e:
         error(args, str(e))
         return 2
@@ -78,6 +95,11 @@ def run_command(args: argparse.Namespace) -> int:
     sys.stdout.write(report.text())
     status = 0 if report.figures["result"]["passed"] else 130 if result.interrupted else 1
     motion = None
+    print(f"bus budget: {budget.describe(budget_in)}")
+    if result.after is not None and result.after.bus_load is not None:
+        mean, peak = result.after.bus_load
+        print(f"bus after the PDO setup: load {100 * mean:.1f} % mean, {100 * peak:.1f} % in the busiest 100 ms "
+              f"(budget {args.bus_share:g} %)")
     if result.after is not None:
         check = check_motion(result.after, plan, result.drives)
         motion = MotionReport(result.after, check, result.trace, result.drives)

@@ -67,6 +67,8 @@ class MotionResult:
     timed_out: bool = False
     clock_offsets: dict = field(default_factory=dict)   # node -> drive time - PLC time (real time; 0 on sim)
     clock_margin_ns: int = 0                            # how far that offset may be off (real time)
+    inhibit_100us: int = 0                              # TxPDO2's inhibit time the bus budget chose
+    bus_load: tuple | None = None                       # (mean, peak of 100 ms) load after the PDO setup (sim)
 
     @property
     def finished(self) -> bool:
@@ -120,22 +122,24 @@ class MotionSampler(IdlePredicate):
         return 0 if now is None else now - plc_t
 
 
-def _write_steps(plc, plan: Plan) -> None:
-    values = [s.plc_value() for s in plan.steps]
+def _write_steps(plc, plan: Plan, inhibit_100us: int = 0) -> None:
+    # every step carries the TxPDO2 inhibit time of the bus budget (linmot_st.motion.budget); SETUP uses it
+    values = [{**s.plc_value(), "INHIBIT100US": inhibit_100us} for s in plan.steps]
     blank = {"KIND": "PLC_STEP_NONE", "POSITION": 0.0, "VELOCITY": 0.0, "ACCELERATION": 0.0, "CURVEID": 0,
-             "ENTRY": 0}
+             "ENTRY": 0, "INHIBIT100US": 0}
     plc[f"{INSTANCE}.STEPS"] = values + [blank] * (MAX_STEPS - len(values))
     plc[f"{INSTANCE}.NSTEPS"] = len(values)
 
 
-def motion_phase(plan: Plan, timeout_s: float, progress=None):
-    """The `after` hook of the commissioning runner: runs the steps on every commissioned axis."""
+def motion_phase(plan: Plan, timeout_s: float, progress=None, inhibit_100us: int = 0):
+    """The `after` hook of the commissioning runner: runs the steps on every commissioned axis, with this TxPDO2
+    inhibit time (the bus budget's, linmot_st.motion.budget)."""
 
     def after(plc, sim, drives) -> MotionResult:
         from linmot_st.cosim import CoSimTimeout
 
         nodes = list(drives) or list(range(1, plc[f"{INSTANCE}.AXES"] + 1))
-        _write_steps(plc, plan)
+        _write_steps(plc, plan, inhibit_100us)
         plc[f"{INSTANCE}.RUNMOTION"] = True
         sampler = MotionSampler(plc, nodes, plan, progress, drives)
         result = MotionResult(plan, sampler.axes, plc.time_ns)
@@ -153,6 +157,13 @@ def motion_phase(plan: Plan, timeout_s: float, progress=None):
             result.timed_out = True
         result.wall_s = time.perf_counter() - wall0
         result.t1_ns, result.scans = plc.time_ns, sampler.scans
+        result.inhibit_100us = inhibit_100us
+        bus = getattr(sim, "bus", None)
+        if getattr(bus, "trace", None) is not None and hasattr(bus, "bit_ns"):
+            from .budget import measured_load
+            # from the end of the last axis' PDO setup: its SDO exchanges precede the process data
+            ends = [r.t1_ns for ax in sampler.axes for r in ax.steps if r.kind == "setup" and r.t1_ns]
+            result.bus_load = measured_load(bus.trace, bus.bit_ns, max(ends, default=result.t0_ns), result.t1_ns)
         for ax in sampler.axes:
             m = plc[f"{INSTANCE}.A{ax.axis}.MOT"]
             ax.error_id, ax.drive_error, ax.fail_step = m["ERRORID"], m["DRIVEERROR"], m["FAILSTEP"]
@@ -165,8 +176,8 @@ def motion_phase(plan: Plan, timeout_s: float, progress=None):
 
 
 def run_job(pvl, opts: RunOptions, build_result, plan: Plan, *, dataset=None, progress=None,
-            motion_progress=None, timeout_s: float = 60.0, **kw) -> RunResult:
+            motion_progress=None, timeout_s: float = 60.0, inhibit_100us: int = 0, **kw) -> RunResult:
     """Commission, then move: the commissioning RunResult with the MotionResult in .after (None when the
     commissioning failed)."""
     return run(pvl, opts, build_result, dataset=dataset, progress=progress,
-               after=motion_phase(plan, timeout_s, motion_progress), **kw)
+               after=motion_phase(plan, timeout_s, motion_progress, inhibit_100us), **kw)

@@ -13,7 +13,7 @@ from __future__ import annotations
 import struct
 from dataclasses import dataclass, field
 
-from linmot_st.emulator.motion import commands as C
+from linmot_st.protocol import commands as C
 from linmot_st.protocol.upids import P_CURVE_AMPLITUDE, P_CURVE_OFFSET, P_CURVE_TIME_SCALE, P_SCALE_POS
 
 MM = 10_000                     # 0.1 um per mm

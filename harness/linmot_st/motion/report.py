@@ -8,7 +8,7 @@ import json
 from dataclasses import asdict
 from pathlib import Path
 
-from linmot_st.errors import describe
+from linmot_st.protocol.errors import describe
 
 from .check import MotionCheck
 from .job import MotionResult

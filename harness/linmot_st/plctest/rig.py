@@ -52,7 +52,7 @@ class FbResult:
 
     @property
     def error_name(self) -> str:
-        from linmot_st.errors import name_of
+        from linmot_st.protocol.errors import name_of
         return name_of(self.error_id)
 
 

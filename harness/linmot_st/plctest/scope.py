@@ -207,7 +207,7 @@ def drive_signal(rig: Any, name: str) -> Signal:
     if what == "status_word":
         return Signal(name, lambda: drive.mc.words[0], "INT", bits=16)
     if what == "state":
-        from linmot_st.emulator.motion.words import STATE_NAMES
+        from linmot_st.protocol.words import STATE_NAMES
         names = tuple(STATE_NAMES[k] for k in sorted(STATE_NAMES))
         return Signal(name, lambda: STATE_NAMES.get(drive.mc.state, drive.mc.state), "ENUM", names=names)
     from linmot_st.emulator import BOOTING, OFF, OPERATIONAL, PRE_OPERATIONAL, STOPPED

@@ -25,7 +25,7 @@ from .errorlog import ErrorLog
 from .manufacturer import ManufacturerObjects
 from ..cia301.sdo import Reply
 from ..motion import MotionControl, MotionSettings
-from ..motion.words import ERROR, SETUP_ERROR
+from ...protocol.words import ERROR, SETUP_ERROR
 from .options import ProtocolOptions
 from .params import ParameterStore
 from .model import E1100, DriveModel

@@ -9,11 +9,9 @@ setpoint generation, the axis that follows it, and the trajectory record (the PD
 """
 
 from .axis import Axis
-from .commands import COMMANDS, CommandDef, decode, encode
 from .control import MotionControl
 from .settings import MotionSettings
 from .setpoints import CurvePlan, StopPlan, VaPlan
 from .trajectory import Sample, Trajectory
 
-__all__ = ["Axis", "COMMANDS", "CommandDef", "CurvePlan", "MotionControl", "MotionSettings",
-           "Sample", "StopPlan", "Trajectory", "VaPlan", "decode", "encode"]
+__all__ = ["Axis", "CurvePlan", "MotionControl", "MotionSettings", "Sample", "StopPlan", "Trajectory", "VaPlan"]

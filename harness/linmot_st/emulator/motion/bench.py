@@ -20,7 +20,7 @@ from ...bus import Frame, SimBus
 from ..linmot.drive import DriveTimings, E1100Drive
 from ..models import make_drive
 from ..linmot.profile import load_profile
-from . import commands as C
+from ...protocol import commands as C
 from .settings import MotionSettings
 
 MS = 1_000_000

@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import struct
 
-from . import commands as C
-from . import words as W
+from ...protocol import commands as C
+from ...protocol import words as W
 
 END = 0xFFFF
 

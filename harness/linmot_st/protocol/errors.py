@@ -2,12 +2,9 @@
 
 This table is the single source of truth. `st_lib/types/errors.st` (the struct `T_LmErrorIds` whose members
 hold these numbers as initial values, used by every FB) and the ErrorID table of `docs/st-library.md` are
-generated from it:
-
-    python -m linmot_st.errors --write      # rewrite st_lib/types/errors.st and the docs table
-    python -m linmot_st.errors --check      # exit 1 if either differs from this table
-
-and `tests/test_stlib_errors.py` fails if they diverge. `describe()` turns an ErrorID (and the SDO abort
+generated from it
+by `python -m linmot_st.protocol --write` (protocol/generate.py; `--check` exits 1 when they differ, and
+`tests/test_protocol_generate.py` runs it). `describe()` turns an ErrorID (and the SDO abort
 code an FB reports beside it) into text, for the commissioning report.
 
 Scheme (ErrorID is a WORD; the high byte is the group):
@@ -23,18 +20,17 @@ Scheme (ErrorID is a WORD; the high byte is the group):
            invalid motion inputs
 
 The drive's own error codes (the logged error code of the MC software, [MC] chapter 10) are a separate table:
-`emulator/data/e1100_error_texts.csv` holds code, text, name and fatal flag once, and this module generates the
+`emulator/data/e1100_error_texts.csv` holds code, text, name and fatal flag once, and protocol/generate.py generates the
 ST constants `T_LmDriveErrors` and `F_LmDriveErrorText` (st_lib/motion/drive_errors.st) and the docs table from
 it (`DRIVE_ERRORS`).
 """
 
 from __future__ import annotations
 
-import argparse
-import re
-import sys
 from dataclasses import dataclass
 from pathlib import Path
+
+from .codes import SDO_ABORTS
 
 
 @dataclass(frozen=True)
@@ -129,6 +125,7 @@ ERRORS: tuple[ErrorDef, ...] = (
     ErrorDef("ScaleRange", 0x0144, "motion: curve time scale outside 0..200 % or amplitude scale outside -2000..2000 %"),
     ErrorDef("InvalidCurveTime", 0x0145, "motion: curve time zero, negative or above 21474 s"),
     ErrorDef("InvalidMode", 0x0146, "motion: the Mode or Command input names no known variant"),
+    ErrorDef("InvalidBusBudget", 0x0147, "process-data budget: Axes below 1, or a Bitrate that is not a multiple of 1000"),
     # 07xx motion (st_lib/motion): the axis, the process data, the command handshake
     ErrorDef("AxisNotEnabled", 0x0701, "the axis is not in Operation Enabled (state 8): power it with FB_LmPower first"),
     ErrorDef("AxisNotHomed", 0x0702, "the move needs the axis homed (FB_LmHome, or a master homing)"),
@@ -162,7 +159,7 @@ class DriveErrorDef:
 def _load_drive_errors() -> tuple[DriveErrorDef, ...]:
     import csv
 
-    path = Path(__file__).resolve().parent / "emulator" / "data" / "e1100_error_texts.csv"
+    path = Path(__file__).resolve().parents[1] / "emulator" / "data" / "e1100_error_texts.csv"
     with open(path, newline="", encoding="latin-1") as f:
         rows = csv.DictReader(line for line in f if not line.startswith("#"))
         return tuple(DriveErrorDef(r["name"], int(r["code"], 16), r["text"], r["fatal"] == "1") for r in rows)
@@ -176,33 +173,6 @@ def drive_error_text(code: int) -> str:
     """The drive's text for a logged error code ('' when the table has none)."""
     d = DRIVE_ERRORS_BY_CODE.get(code)
     return d.text if d else ""
-
-# CiA 301 SDO abort codes (section 7.2.4.3.17), for AbortCode
-SDO_ABORTS: dict[int, str] = {
-    0x05030000: "toggle bit not alternated",
-    0x05040000: "SDO protocol timed out",
-    0x05040001: "client/server command specifier not valid or unknown",
-    0x05040005: "out of memory",
-    0x06010000: "unsupported access to an object",
-    0x06010001: "attempt to read a write only object",
-    0x06010002: "attempt to write a read only object",
-    0x06020000: "object does not exist in the object dictionary",
-    0x06040041: "object cannot be mapped to the PDO",
-    0x06060000: "access failed due to a hardware error",
-    0x06070010: "data type does not match, length of service parameter does not match",
-    0x06070012: "data type does not match, length of service parameter too high",
-    0x06070013: "data type does not match, length of service parameter too low",
-    0x06090011: "sub-index does not exist",
-    0x06090030: "invalid value for parameter (download only)",
-    0x06090031: "value of parameter written too high",
-    0x06090032: "value of parameter written too low",
-    0x08000000: "general error",
-    0x08000020: "data cannot be transferred or stored to the application",
-    0x08000021: "data cannot be transferred because of local control",
-    0x08000022: "data cannot be transferred because of the present device state",
-    0x08000024: "no data available",
-}
-
 
 def describe(error_id: int, abort_code: int = 0) -> str:
     """Text for an ErrorID of the library (and the SDO abort code reported with ErrorID SdoAbort)."""
@@ -226,149 +196,3 @@ def name_of(error_id: int) -> str:
     if RESULT_BASE <= error_id <= RESULT_BASE + 0xFF:
         return f"Result{error_id - RESULT_BASE:02X}h"
     return f"16#{error_id:04X}"
-
-
-# ---------------------------------------------------------------- generated artefacts
-
-REPO = Path(__file__).resolve().parents[2]
-ST_FILE = REPO / "st_lib" / "types" / "errors.st"
-DRIVE_ST_FILE = REPO / "st_lib" / "motion" / "drive_errors.st"
-DRIVE_DOC_FILE = REPO / "docs" / "motion.md"
-DRIVE_DOC_BEGIN = "<!-- drive-errors:begin (generated by python -m linmot_st.errors --write) -->"
-DRIVE_DOC_END = "<!-- drive-errors:end -->"
-DOC_FILE = REPO / "docs" / "st-library.md"
-DOC_BEGIN = "<!-- errors:begin (generated by python -m linmot_st.errors --write) -->"
-DOC_END = "<!-- errors:end -->"
-
-
-def render_st() -> str:
-    width = max(len(e.name) for e in ERRORS)
-    lines = [
-        "(* ErrorID numbers of the library. GENERATED from harness/linmot_st/errors.py by",
-        "   `python -m linmot_st.errors --write`: edit the Python table, not this file.",
-        "   Every FB holds one instance `E : T_LmErrorIds` and reports `E.<Name>`; the members' initial",
-        "   values are the numbers. Groups: 01xx invalid input, 02xx channel, 03xx transfer,",
-        "   04xx E1100 result code rr (16#0400 + rr), 05xx firmware compatibility, 06xx commissioning,",
-        "   07xx motion. *)",
-        "TYPE",
-        "  T_LmErrorIds : STRUCT",
-    ]
-    for e in ERRORS:
-        text = e.text.replace("(*", "( *").replace("*)", "* )")
-        lines.append(f"    {e.name.ljust(width)} : WORD := 16#{e.value:04X};  (* {text} *)")
-    lines += ["  END_STRUCT;", "END_TYPE", ""]
-    return "\n".join(lines)
-
-
-def render_drive_st() -> str:
-    width = max(len(d.name) for d in DRIVE_ERRORS)
-    lines = [
-        "(* The drive's error codes (the logged error code of the MC software, [MC] chapter 10; the CANopen",
-        "   interface's C1h..DCh). GENERATED from harness/linmot_st/emulator/data/e1100_error_texts.csv by",
-        "   `python -m linmot_st.errors --write`: edit the table, not this file.",
-        "   Declare `DE : T_LmDriveErrors;` and compare: IF Err.AxisErrorID = DE.PosLagAlways THEN ...",
-        "   F_LmDriveErrorText gives the drive's text, F_LmDriveErrorFatal whether it can be acknowledged. *)",
-        "TYPE",
-        "  T_LmDriveErrors : STRUCT",
-    ]
-    for d in DRIVE_ERRORS:
-        lines.append(f"    {d.name.ljust(width)} : WORD := 16#{d.code:04X};  (* {d.text}{' (fatal)' if d.fatal else ''} *)")
-    lines += ["  END_STRUCT;", "END_TYPE", "",
-              "FUNCTION F_LmDriveErrorText : STRING",
-              "  (* the drive's text for a logged error code; '' for a code the table does not know *)",
-              "  VAR_INPUT", "    Code : WORD;", "  END_VAR",
-              "  CASE WORD_TO_UINT(Code) OF"]
-    for d in DRIVE_ERRORS:
-        lines.append(f"    {d.code}: F_LmDriveErrorText := '{d.text}';")
-    lines += ["  ELSE", "    F_LmDriveErrorText := '';", "  END_CASE;", "END_FUNCTION", "",
-              "FUNCTION F_LmDriveErrorFatal : BOOL",
-              "  (* TRUE for a code the table marks fatal (no acknowledge possible) *)",
-              "  VAR_INPUT", "    Code : WORD;", "  END_VAR",
-              "  CASE WORD_TO_UINT(Code) OF",
-              "    " + ", ".join(str(d.code) for d in DRIVE_ERRORS if d.fatal) + ":",
-              "      F_LmDriveErrorFatal := TRUE;",
-              "  ELSE", "    F_LmDriveErrorFatal := FALSE;", "  END_CASE;", "END_FUNCTION", ""]
-    return "\n".join(lines)
-
-
-def render_drive_doc_table() -> str:
-    rows = ["| code | T_LmDriveErrors member | the drive's text | fatal |", "|---|---|---|---|"]
-    for d in DRIVE_ERRORS:
-        rows.append(f"| {d.code:04X}h | `{d.name}` | {d.text} | {'yes' if d.fatal else ''} |")
-    return "\n".join([DRIVE_DOC_BEGIN, *rows, DRIVE_DOC_END])
-
-
-def render_doc_table() -> str:
-    rows = ["| ErrorID | Name | Meaning |", "|---|---|---|"]
-    for e in ERRORS:
-        rows.append(f"| 16#{e.value:04X} | `{e.name}` | {e.text} |")
-    return "\n".join([DOC_BEGIN, *rows, DOC_END])
-
-
-def parse_st(text: str) -> dict[str, int]:
-    """Members and values of T_LmErrorIds as written in an ST file (used by the divergence check)."""
-    out: dict[str, int] = {}
-    for m in re.finditer(r"^\s*(\w+)\s*:\s*WORD\s*:=\s*16#([0-9A-Fa-f]+)\s*;", text, re.M):
-        out[m.group(1)] = int(m.group(2), 16)
-    return out
-
-
-def _doc_with_table(doc: str, begin: str = DOC_BEGIN, end: str = DOC_END, render=render_doc_table,
-                    where: Path = DOC_FILE) -> str:
-    pattern = re.compile(re.escape(begin) + ".*?" + re.escape(end), re.S)
-    if not pattern.search(doc):
-        raise ValueError(f"{where}: markers {begin!r} .. {end!r} not found")
-    return pattern.sub(lambda _m: render(), doc)
-
-
-_DOCS = ((DOC_FILE, DOC_BEGIN, DOC_END, render_doc_table), (DRIVE_DOC_FILE, DRIVE_DOC_BEGIN, DRIVE_DOC_END,
-                                                             render_drive_doc_table))
-
-
-def check() -> list[str]:
-    """Differences between the tables and the generated files (empty when in sync)."""
-    problems = []
-    for path, render in ((ST_FILE, render_st), (DRIVE_ST_FILE, render_drive_st)):
-        if not path.exists() or path.read_text() != render():
-            problems.append(f"{path} differs from the table in {__name__}")
-    for path, begin, end, render in _DOCS:
-        if path.exists():
-            doc = path.read_text()
-            try:
-                if _doc_with_table(doc, begin, end, render, path) != doc:
-                    problems.append(f"{path}: the generated table differs from the table in {__name__}")
-            except ValueError as exc:
-                problems.append(str(exc))
-    return problems
-
-
-def write() -> None:
-    ST_FILE.write_text(render_st())
-    DRIVE_ST_FILE.parent.mkdir(exist_ok=True)
-    DRIVE_ST_FILE.write_text(render_drive_st())
-    for path, begin, end, render in _DOCS:
-        if path.exists():
-            path.write_text(_doc_with_table(path.read_text(), begin, end, render, path))
-
-
-def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="python -m linmot_st.errors", description=__doc__.splitlines()[0])
-    g = p.add_mutually_exclusive_group(required=True)
-    g.add_argument("--write", action="store_true", help="rewrite st_lib/types/errors.st and the docs table")
-    g.add_argument("--check", action="store_true", help="exit 1 if the generated files differ")
-    g.add_argument("--describe", type=lambda s: int(s, 0), metavar="ERRORID", help="print the text of an ErrorID")
-    args = p.parse_args(argv)
-    if args.write:
-        write()
-        return 0
-    if args.check:
-        problems = check()
-        for line in problems:
-            print(line, file=sys.stderr)
-        return 1 if problems else 0
-    print(describe(args.describe))
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

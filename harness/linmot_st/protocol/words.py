@@ -1,12 +1,13 @@
 """The words of the MC software's interface (seed 004 chapter 3, [MC] chapter 3 and 10): main states, control
 word, status word and warn word bits, and the error codes the motion model raises.
 
-Only numbers live here; the behaviour is in state_machine.py and the generators.
+Only numbers live here (the catalogue: the PLC library and the emulated drive share them); the behaviour is in
+the drive's MC model (emulator/motion/).
 """
 
 from __future__ import annotations
 
-from ...errors import DRIVE_ERRORS
+from .errors import DRIVE_ERRORS
 
 # ---- main states (state var high byte) ------------------------------------------------------------------
 NOT_READY_TO_SWITCH_ON = 0

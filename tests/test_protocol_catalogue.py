@@ -1,0 +1,143 @@
+"""The motion-command catalogue (linmot_st/protocol/commands/): its rows are consistent, and a command of an
+existing kind is one row: added here (in the test only), the emulated drive executes it and the regenerated ST
+encoder encodes it as the Python codec does."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import pytest
+
+from linmot_st.emulator import DriveTimings, E1100Drive, load_profile
+from linmot_st.emulator.motion.interpreter import HANDLERS
+from linmot_st.emulator.testing import MotionLink
+from linmot_st.protocol import commands as C
+from linmot_st.protocol import generate
+from linmot_st.protocol import words as W
+
+sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
+from stbench import available_backends  # noqa: E402
+
+MS = 1_000_000
+MM = 10_000
+
+# 093xh, [MC] 4.3.76 (spec/linmot-motion-commands.md row 72): V16(target), from the actual position and velocity
+NEW_ROW = C.CommandDef(0x093, "VAI 16 Bit Go To Pos From Act Pos And Act Vel", C.COMMANDS[C.VAI16_GO_TO_POS].fields,
+                       C.Kind.VAI_16BIT, needs_homing=True, start=C.Start.ACTUAL, target=C.Target.ABSOLUTE,
+                       source="[MC] 4.3.76")
+
+
+def test_rows_are_consistent():
+    for cid, c in C.COMMANDS.items():
+        assert cid == c.cid and 0 <= cid <= 0xFFF
+        assert c.kind in HANDLERS, f"{cid:03X}h: no handler for {c.kind}"
+        assert len(c.fields) <= 4 and len(set(c.field_names)) == len(c.fields)
+        assert c.states and c.states <= C.IN_ANY_STATE and c.drives
+        assert c.source.startswith("[MC] 4.3.")
+    # system commands run in every state, motion only in Operation Enabled (seed 004 3.7)
+    assert {cid for cid, c in C.COMMANDS.items() if c.states == C.IN_ANY_STATE} == {
+        C.NOP, C.WRITE_CONTROL_WORD, C.WRITE_LIVE_PARAMETER}
+    assert C.COMMANDS[C.VAI_GO_TO_POS].transport is C.Transport.COMMAND_TABLE      # 16 bytes: only in a CT entry
+    assert C.COMMANDS[C.VAI16_GO_TO_POS].transport is C.Transport.RXPDO3          # 8 bytes
+    assert C.COMMANDS[C.PREDEF_VAI_GO_TO_POS].transport is C.Transport.RXPDO2     # 4 bytes
+
+
+def test_the_python_codec_against_the_shared_vectors():
+    """The vectors the ST encoder is checked against (test_motion_fbs.py) hold for the catalogue's codec too."""
+    vectors = json.loads((Path(__file__).parent / "vectors" / "motion_commands.json").read_text())["vectors"]
+    for v in vectors:
+        cid, image = int(v["cid"], 16), bytes.fromhex(v["image"])
+        assert C.encode(cid, v["count"], **v["fields"]) == image, v["name"]
+        row, fields = C.decode(int.from_bytes(image[:2], "little"), image[2:])
+        assert row is C.COMMANDS[cid] and fields == v["fields"], v["name"]
+    assert {int(v["cid"], 16) for v in vectors} <= set(C.COMMANDS)
+
+
+def _homed_link() -> MotionLink:
+    d = E1100Drive(1, load_profile().with_defaults({0x1194: 2}), timings=DriveTimings.fast())
+    link = MotionLink(d)
+    link.enable()
+    link.home()
+    link.advance(MS)
+    return link
+
+
+MOVE = dict(target=100, vmax=100, acc=10, dec=10)     # 16-bit scaling: 10 mm, 0.1 m/s, 1 m/s^2
+
+
+def test_without_its_row_the_drive_refuses_093h():
+    assert 0x093 not in C.COMMANDS
+    link = _homed_link()
+    link.command(0x093)                  # the header alone: the catalogue has no layout for it
+    link.advance(10 * MS)
+    assert link.drive.mc.state == W.ERROR and link.drive.mc.error_code == W.ERR_UNKNOWN_MOTION_CMD
+
+
+def test_a_new_row_is_executed_by_the_emulated_drive(monkeypatch):
+    monkeypatch.setitem(C.COMMANDS, NEW_ROW.cid, NEW_ROW)
+    link = _homed_link()
+    mc = link.drive.mc
+    t0 = link.t
+    link.command(0x093, **MOVE)
+    link.advance(400 * MS)               # a triangle: 2 sqrt(d / a) = 200 ms
+    assert mc.state == W.OPERATION_ENABLED and mc.error_code == 0
+    assert [h >> 4 for t, h, _ in mc.executed if t >= t0] == [0x093]
+    assert abs(mc.axis.position - 10 * MM) <= 1000 and mc.in_target
+    moving = [s for s in mc.trajectory.between(t0) if s.status_word & W.SW_MOTION_ACTIVE]
+    assert 150 * MS <= moving[-1].t_ns - moving[0].t_ns <= 250 * MS
+
+
+def _encoder_program(tmp_path: Path) -> Path:
+    """A program around the regenerated F_LmMotionEncode (with the test's row): the library's image helpers,
+    then the generated function, then a program that encodes on every scan."""
+    src = tmp_path / "enc.st"
+    includes = ["types/can.st", "types/errors.st", "types/lm_types.st", "codecs/le.st", "motion/types.st",
+                "motion/codec.st"]
+    src.write_text("\n".join(f'{{#include "st_lib/{i}"}}' for i in includes) + "\n" + generate.render_codec() + """
+PROGRAM TB_Enc
+  VAR
+    Cid : UINT;
+    Count : USINT;
+    A : DINT;
+    B : DINT;
+    C : DINT;
+    D : DINT;
+    Img : T_LmMotionImage;
+    NBytes : USINT;
+  END_VAR
+  NBytes := F_LmMotionEncode(Cid := Cid, Count := Count, A := A, B := B, C := C, D := D, Img := Img);
+END_PROGRAM
+
+CONFIGURATION Config0
+  RESOURCE Res0 ON PLC
+    TASK Main(INTERVAL := T#1ms, PRIORITY := 0);
+    PROGRAM Enc WITH Main : TB_Enc;
+  END_RESOURCE
+END_CONFIGURATION
+""")
+    return src
+
+
+@pytest.mark.parametrize("backend", available_backends() or ["none"])
+def test_the_regenerated_st_encoder_encodes_a_new_row(monkeypatch, tmp_path, backend):
+    if backend == "none":
+        pytest.skip("no ST backend")
+    from linmot_st import toolchain
+    from linmot_st.plc import Plc
+
+    monkeypatch.setitem(C.COMMANDS, NEW_ROW.cid, NEW_ROW)
+    assert "147, " not in (generate.REPO / "st_lib/motion/codec_gen.st").read_text()   # the library has no 093h
+    plc = Plc(toolchain.build(str(_encoder_program(tmp_path)), backend=backend, root=tmp_path))
+    cases = [(0x093, 5, dict(target=-1234, vmax=100, acc=10, dec=65535)),
+             (C.VAI16_GO_TO_POS, 7, dict(target=32767, vmax=1, acc=2, dec=3)),
+             (C.TIME_CURVE_OFFSET_TIME_AMP, 3, dict(curve_id=2, offset=-50000, curve_time=12345, amplitude=-1000))]
+    for cid, count, fields in cases:
+        expected = C.encode(cid, count, **fields)
+        plc["ENC.CID"], plc["ENC.COUNT"] = cid, count
+        for name, value in zip("ABCD", list(fields.values()) + [0] * 4):
+            plc[f"ENC.{name}"] = value
+        plc.step(1)
+        assert plc["ENC.NBYTES"] == len(expected) - 2, hex(cid)
+        assert bytes(plc["ENC.IMG"])[:len(expected)] == expected, hex(cid)
