@@ -131,3 +131,31 @@ def test_the_e1100_motion_model_runs_on_the_b1100_upids(link):
     link.sdo(select(0x6061))
     sw = int.from_bytes(link.sdo("40 00 20 01 00 00 00 00")[4:8], "little")
     assert sw == d.mc.words[0]
+
+
+@pytest.mark.parametrize("header", [0x0400, 0x0900, 0x2000])     # time curve, VAI 16 bit, command table
+def test_commands_whose_catalogue_row_lacks_the_b1100_answer_0081h(header):
+    from linmot_st.protocol.commands import B1100, COMMANDS
+    assert B1100 not in COMMANDS[header >> 4].drives
+    for model, refused in (("B1100", True), ("E1100", False)):
+        link = DirectLink(make_drive(model, NODE, timings=DriveTimings.fast()))
+        link.run_until(link.t + 100_000_000)            # the MC runs (boot + HW tests)
+        mc = link.node.mc
+        mc.execute(header, bytes(16), link.t)
+        assert (mc.error_code == 0x0081) is refused, model
+
+
+def test_the_b1100_motor_type_decides_the_setup_error_and_its_commands_run():
+    """D194h (Motor Type, counterpart 1194h): 0 boots the MC into the setup error 0064h as the E1100's; with a
+    motor the MC is ready and a command of both drives runs."""
+    drive = make_drive("B1100", NODE, timings=DriveTimings.fast())
+    link = DirectLink(drive)
+    link.run_until(link.t + 100_000_000)
+    assert drive.mc.error_code == 0x0064
+    drive = make_drive("B1100", NODE, timings=DriveTimings.fast())
+    drive.params[0xD194].rom = 2
+    link = DirectLink(drive)
+    link.run_until(link.t + 100_000_000)
+    mc = drive.mc
+    mc.execute(0x0000, bytes(16), link.t)                 # No Operation: both drives
+    assert mc.error_code == 0

@@ -156,6 +156,7 @@ class B1100Drive(E1100Drive):
         kw.setdefault("model", B1100)
         super().__init__(node_id, *args, **kw)
         view, mc = self.mc.params, self.mc
+        mc.drive_type = "B1100"             # commands whose catalogue row lacks the B1100 answer 0081h
         e_of = view.e1100_of
         self.params.use_strings([d for d in self.profile.parameters if d.kind == "string"],
                                 self.profile.definitions.stringlet_offset)
