@@ -66,7 +66,10 @@ class RunOptions:
     latency_ns: int = 0                        # extra latency of the drives' frames on the simulated bus
     timeout_s: float | None = None             # virtual (sim) or wall seconds; default from the dataset
     emulate: bool = True                       # False: real drives on the bus (python-can buses only)
-    drive_model: str = "E1100"                 # the emulated drives' model (emulator/models.py)
+    drive_model: str | None = None             # the emulated drives' model (emulator/models.py); None: each
+                                               # node's drive is of the series its PVL file is for
+    drive_models: dict = field(default_factory=dict)   # node ID -> model (`--drive NODE=MODEL`), before both
+    series: dict = field(default_factory=dict)  # node ID -> the series its PVL file is for (set by run())
     fast_idle: bool = True                     # sim: idle scans run in C (linmot_st.cosim); False: every scan
                                                # from Python (the same frames at the same times, slower)
 
@@ -286,12 +289,15 @@ def drive_wear(drive) -> dict:
                 rom_writes=drive.params.rom_writes)
 
 
-def _configure(plc, opts: RunOptions, nodes: list[int], curve_memory: int = 0, bases: list[int] | None = None
-               ) -> None:
+def _configure(plc, opts: RunOptions, nodes: list[int], curve_memory: int = 0, bases: list[int] | None = None,
+               drives_series: dict[int, str] | None = None) -> None:
+    """The program's settings; `drives_series` {node: "E1100" | "B1100"} gives each axis its channel's Drive."""
     p = INSTANCE
     plc[f"{p}.AXES"] = len(nodes)
     plc[f"{p}.NODEIDS"] = node_id_table(nodes)
     plc[f"{p}.DATABASES"] = (bases or [1] * len(nodes)) + [1] * (MAX_AXES - len(nodes))
+    series = [f"LM_{(drives_series or {}).get(n, 'E1100')}" for n in nodes]
+    plc[f"{p}.DRIVES"] = series + ["LM_E1100"] * (MAX_AXES - len(nodes))
     plc[f"{p}.WAITBOOT"] = opts.emulate            # emulated drives are switched on with the PLC
     plc[f"{p}.LIVERAM"] = opts.live_ram
     plc[f"{p}.FLASH"] = opts.flash
@@ -347,11 +353,20 @@ def run_timeout_s(datasets, nodes: list[int], opts: RunOptions) -> float:
     return slowest + 4 * exchanges * 2 * max_bus_bits(8) / opts.bitrate
 
 
-def emulated_drive(node_id: int, opts: RunOptions):
+def drive_model_of(node_id: int, opts: RunOptions, datasets=None) -> str:
+    """The model of a node's emulated drive: `--drive NODE=MODEL`, else RunOptions.drive_model, else the
+    series the node's PVL file is for (so a B1100 file gets an emulated B1100), else the E1100."""
+    model = opts.drive_models.get(node_id) or opts.drive_model
+    if model is None and datasets is not None:
+        model = datasets.of(node_id).pvl.drive_type.name
+    return model or "E1100"
+
+
+def emulated_drive(node_id: int, opts: RunOptions, datasets=None):
     from linmot_st.emulator import DriveTimings
     from linmot_st.emulator.models import make_drive
     timings = DriveTimings.fast() if opts.timing_kind() == "fast" else DriveTimings()
-    return make_drive(opts.drive_model, node_id, timings=timings)
+    return make_drive(drive_model_of(node_id, opts, datasets), node_id, timings=timings)
 
 
 def run(pvl, opts: RunOptions, build_result, *, dataset=None, datasets=None, progress=None,
@@ -374,8 +389,9 @@ def run(pvl, opts: RunOptions, build_result, *, dataset=None, datasets=None, pro
         datasets = Datasets(Source(pvl, dataset or from_pvl(pvl), getattr(pvl, "filename", None) or "PVL"))
     timeout_s = opts.timeout_s or run_timeout_s(datasets, nodes, opts)
     plc = Plc(build_result)
-    factory = _checked_factory(drive_factory or (lambda n: emulated_drive(n, opts)), datasets)
+    factory = _checked_factory(drive_factory or (lambda n: emulated_drive(n, opts, datasets)), datasets)
     bases = datasets.bases(nodes)
+    opts.series = {n: datasets.of(n).pvl.drive_type.name for n in nodes}   # each axis' Drive (the PLC's setting)
     if opts.simulated:
         res = _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, timeout_s, after, bases)
     else:
@@ -414,7 +430,7 @@ def _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, time
     if prepare_bus:
         prepare_bus(bus, drives)
     sim = CoSim(plc, bus, mailbox=MAILBOX, name="plc", fast_idle=opts.fast_idle)
-    _configure(plc, opts, nodes, _curve_memory(opts, drives), bases)
+    _configure(plc, opts, nodes, _curve_memory(opts, drives), bases, opts.series)
     if prepare_plc:
         prepare_plc(plc)
     sampler = Sampler(plc, nodes, progress)
@@ -513,7 +529,7 @@ def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s, a
         for b, d in zip(drive_buses, drives.values()):
             d.attach(b)                                  # switched on now: boots after its boot time
         sim = RealTimeCoSim(plc, plc_bus, mailbox=MAILBOX, echo=echo)
-        _configure(plc, opts, nodes, _curve_memory(opts, drives), bases)
+        _configure(plc, opts, nodes, _curve_memory(opts, drives), bases, opts.series)
         if prepare_plc:
             prepare_plc(plc)
         sampler = Sampler(plc, nodes, progress)
