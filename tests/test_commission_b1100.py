@@ -93,3 +93,17 @@ def test_drive_option_refuses_bad_values(bad, capsys):
     with pytest.raises(SystemExit):
         main(["commission", str(B1100_FILE), "--drive", bad])
     assert "--drive" in capsys.readouterr().err
+
+
+def test_the_report_bound_counts_the_selection_exchanges(tmp_path):
+    """A full write (--force) of the B1100 file: 2 layers x 3 reads, 26 ROM writes, 26 verify reads, each a
+    selection and an access: the transfer phases make exactly the necessary exchanges."""
+    from linmot_st.pvl import load_pvl
+    from linmot_st.pvl.dataset import expected_exchanges, from_pvl
+
+    ds = from_pvl(load_pvl(B1100_FILE))
+    assert ds.drive == "B1100" and len(ds.params) == 26 and len(ds.layers) == 2
+    assert expected_exchanges(ds) == 2 * (6 + 26 + 26)
+    rep = run(tmp_path, B1100_FILE, "--force")
+    assert rep["transfer"]["exchanges"] == rep["transfer"]["necessary_exchanges"] == expected_exchanges(ds)
+    assert rep["run"]["necessary_exchanges"] == expected_exchanges(ds) + 1        # + the reset request
