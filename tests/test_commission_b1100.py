@@ -107,3 +107,19 @@ def test_the_report_bound_counts_the_selection_exchanges(tmp_path):
     rep = run(tmp_path, B1100_FILE, "--force")
     assert rep["transfer"]["exchanges"] == rep["transfer"]["necessary_exchanges"] == expected_exchanges(ds)
     assert rep["run"]["necessary_exchanges"] == expected_exchanges(ds) + 1        # + the reset request
+
+
+def test_motion_moves_an_e1100_and_a_b1100_on_one_bus(tmp_path, capsys):
+    """`linmot-st motion` with per-node files: both axes are commissioned, set up, powered, homed, moved to
+    50 mm and stopped; the E1100's curves and command table are not run (the B1100 has none), and say so."""
+    report = tmp_path / "report"
+    assert main(["motion", str(E1100_FILE), "--axes", "2", "--pvl", f"2={B1100_FILE}", "--backend", "builtin",
+                 "-q", "--report", str(report)]) == 0
+    out = capsys.readouterr().out
+    assert "motion job: PASSED: 2 axis/axes, 6 steps each" in out
+    assert "not run: curve 1 MinJerk_100mm_400ms: not on every axis" in out
+    assert "node 2: parameters ROM 26/26, parameters RAM 26/26: OK" in out
+    motion = json.loads((report / "motion.json").read_text())
+    b1100 = sdo_requests(report / "can.log", 2)
+    assert_selection_protocol(b1100)
+    assert motion

@@ -180,6 +180,9 @@ class RunResult:
     wear_before: dict = field(default_factory=dict)  # node ID -> drive_wear() when switched on
     wear_after: dict = field(default_factory=dict)   # and at the end of the run
     after: Any = None                          # what run(after=...) returned (the motion job's result)
+    ram_commissioned: dict = field(default_factory=dict)  # node -> {UPID: RAM} before run(after=...): what
+                                               # the commissioning left, for the verification (a move's
+                                               # live parameter writes come later)
     datasets: Any = None                       # datasets.Datasets: each node's PVL and dataset
 
     @property
@@ -400,6 +403,14 @@ def run(pvl, opts: RunOptions, build_result, *, dataset=None, datasets=None, pro
     return res
 
 
+def _ram_of(drives: dict) -> dict:
+    out = {}
+    for n, d in drives.items():
+        with d.lock:                    # a real-time drive runs in its own thread
+            out[n] = {p.upid: p.ram for p in d.params}
+    return out
+
+
 def _checked_factory(factory, datasets):
     """The drive factory, refusing a drive whose series is not what its node's PVL file is for (before the
     drive is powered on, so before the PLC sends it anything)."""
@@ -449,10 +460,11 @@ def _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, time
     sampler.close()
     _collect(plc, sampler)
     commissioned = all(a.done for a in sampler.axes) and not timed_out and not fault
+    ram_commissioned = _ram_of(drives) if after is not None else {}
     after_result = after(plc, sim, drives) if after is not None and commissioned else None
     res = RunResult(opts, nodes, plc.tick_ns, bus.bit_ns, sampler.axes, list(bus.trace), drives,
                     scans=sim.scans, wall_s=wall, timed_out=timed_out, fault=fault, before=before,
-                    interrupted=interrupted, after=after_result, wear_before=wear_before,
+                    interrupted=interrupted, after=after_result, ram_commissioned=ram_commissioned, wear_before=wear_before,
                     wear_after={n: drive_wear(d) for n, d in drives.items()})
     res.stats = bus.stats(res.t_start_ns, max(res.t_end_ns, res.t_start_ns))
     return res
@@ -548,6 +560,7 @@ def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s, a
         wall = time.perf_counter() - wall0
         sampler.close()
         commissioned = all(a.done for a in sampler.axes) and not timed_out and not fault
+        ram_commissioned = _ram_of(drives) if after is not None else {}
         after_result = after(plc, sim, drives) if after is not None and commissioned else None
     finally:
         for d in drives.values():
@@ -562,7 +575,7 @@ def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s, a
     res = RunResult(opts, nodes, plc.tick_ns, bit_ns, sampler.axes, trace, drives, scans=sim.scans,
                     wall_s=wall, timed_out=timed_out, fault=fault, overruns=sim.overruns,
                     max_lateness_ns=sim.max_lateness_ns, skipped_ticks=sim.skipped_ticks, before=before,
-                    interrupted=interrupted, after=after_result, wear_before=wear_before,
+                    interrupted=interrupted, after=after_result, ram_commissioned=ram_commissioned, wear_before=wear_before,
                     wear_after={n: drive_wear(d) for n, d in drives.items()})
     res.stats = bus_stats(trace, bit_ns, res.t_start_ns, max(res.t_end_ns, res.t_start_ns))
     return res

@@ -56,7 +56,7 @@ class Interpreter:
 
     def _write_live(self, upid: int, raw: int) -> None:
         """002xh: the RAM value of a live parameter, masked to its width (INFERRED: anything else is ignored)."""
-        p = self.params
+        p = getattr(self.params, "store", self.params)     # the drive's own UPIDs (a B1100's: E1100View.store)
         if upid in p:
             d = p[upid].d
             if d.kind == "par" and d.live and d.access == "rw":
