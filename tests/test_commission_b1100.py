@@ -123,3 +123,20 @@ def test_motion_moves_an_e1100_and_a_b1100_on_one_bus(tmp_path, capsys):
     b1100 = sdo_requests(report / "can.log", 2)
     assert_selection_protocol(b1100)
     assert motion
+
+
+def test_mixed_bus_on_pythons_can_virtual_bus(tmp_path):
+    """The same mixed run in real time on python-can's virtual bus (fast drive timings)."""
+    import uuid
+    rep = run(tmp_path, E1100_FILE, "--axes", "2", "--pvl", f"2={B1100_FILE}",
+              "--bus", f"virtual:linmot-st-b1100-{uuid.uuid4().hex[:8]}")
+    assert rep["result"]["passed"]
+    assert_selection_protocol(sdo_requests(rep["_log"], 2))
+
+
+def test_rig_with_a_model_per_node():
+    """The plctest rig builds node 1 an E1100 and node 2 a B1100 ({node: model})."""
+    from linmot_st.plctest.rig import model_of
+
+    models = {2: "B1100"}
+    assert (model_of(models, 1), model_of(models, 2), model_of("B1100", 5)) == ("E1100", "B1100", "B1100")

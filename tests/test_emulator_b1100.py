@@ -159,3 +159,28 @@ def test_the_b1100_motor_type_decides_the_setup_error_and_its_commands_run():
     mc = drive.mc
     mc.execute(0x0000, bytes(16), link.t)                 # No Operation: both drives
     assert mc.error_code == 0
+
+
+def test_a_mixed_bus_on_the_simulated_bus_and_on_python_cans_virtual_bus():
+    """An E1100 (node 1) and a B1100 (node 63) on one bus answer each in its own protocol."""
+    from linmot_st.bus import SimBus
+    from linmot_st.emulator.testing import ServedDrive
+
+    bus = SimBus(500_000)
+    e1100, b1100 = (make_drive(m, n, timings=DriveTimings.fast()) for m, n in (("E1100", 1), ("B1100", NODE)))
+    for name, d in (("e", e1100), ("b", b1100)):
+        bus.attach(d, name)
+        d.power_on(0)
+    bus.run_until(100_000_000)
+    assert e1100.booted and b1100.booted
+    assert {e.frame.can_id for e in bus.trace if e.frame.data == b"\x00"} >= {0x701, 0x700 + NODE}  # boot-ups
+
+    import uuid
+    channel = f"linmot-st-mixed-{uuid.uuid4().hex[:8]}"
+    with ServedDrive(make_drive("E1100", 1, timings=DriveTimings.fast()), channel=channel) as e, \
+            ServedDrive(make_drive("B1100", NODE, timings=DriveTimings.fast()), channel=channel) as b:
+        assert e.client.exchange("40 A0 31 02 00 00 00 00")[0] == 0x43            # E1100: 2000h + 11A0h
+        assert b.client.exchange(select(0xE19C)) == bytes.fromhex("60 00 20 C0 00 00 00 00")
+        answer = b.client.exchange("40 00 20 02 00 00 00 00")
+        assert answer[0] == 0x43 and int.from_bytes(answer[4:8], "little") == b.drive.rom(0xE19C)
+        assert abort_code(b.client.exchange("40 A0 31 02 00 00 00 00")) == ABORT_NO_OBJECT   # not on the B1100
