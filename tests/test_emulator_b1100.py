@@ -184,3 +184,29 @@ def test_a_mixed_bus_on_the_simulated_bus_and_on_python_cans_virtual_bus():
         answer = b.client.exchange("40 00 20 02 00 00 00 00")
         assert answer[0] == 0x43 and int.from_bytes(answer[4:8], "little") == b.drive.rom(0xE19C)
         assert abort_code(b.client.exchange("40 A0 31 02 00 00 00 00")) == ABORT_NO_OBJECT   # not on the B1100
+
+
+def _operation_enabled(model: str):
+    drive = make_drive(model, NODE, timings=DriveTimings.fast())
+    drive.params[0xD194 if model == "B1100" else 0x1194].rom = 2        # a motor: no setup error
+    link = DirectLink(drive)
+    link.run_until(link.t + 100_000_000)
+    for cw in (0x003E, 0x003F):
+        drive.mc.set_control_word(cw, link.t)
+        link.run_until(link.t + 50_000_000)
+    assert drive.mc.state == 8, drive.mc.state
+    return drive, link
+
+
+def test_special_mode_state_20_on_control_word_bit_10_only_on_the_b1100():
+    drive, link = _operation_enabled("B1100")
+    drive.mc.set_control_word(0x043F, link.t)
+    link.run_until(link.t + 5_000_000)
+    assert drive.mc.state == 20 and not drive.mc.controlled               # current 0: no analog input
+    drive.mc.set_control_word(0x003F, link.t)
+    link.run_until(link.t + 5_000_000)
+    assert drive.mc.state == 8 and drive.mc.controlled
+    e1100, elink = _operation_enabled("E1100")
+    e1100.mc.set_control_word(0x043F, elink.t)
+    elink.run_until(elink.t + 5_000_000)
+    assert e1100.mc.state != 20 and e1100.mc.error_code != 0               # refused on the E1100

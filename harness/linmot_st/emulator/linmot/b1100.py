@@ -45,10 +45,12 @@ class B1100Settings:
                        "select": C0h itself refuses an unknown UPID
     initial_selection  the selected UPID after power-on and reset (0000h: no parameter, so 01h/02h abort)
     default_flag       6085h = 1 at boot restores the installation values to ROM and clears the flag
+    special_mode       control word bit 10 in Operation Enabled enters state 20 (current 0: no analog input)
     """
     select_check: str = "access"
     initial_selection: int = 0x0000
     default_flag: bool = True
+    special_mode: bool = True
 
 
 # ---------------------------------------------------------------- the manufacturer services (2000h)
@@ -157,6 +159,7 @@ class B1100Drive(E1100Drive):
         super().__init__(node_id, *args, **kw)
         view, mc = self.mc.params, self.mc
         mc.drive_type = "B1100"             # commands whose catalogue row lacks the B1100 answer 0081h
+        mc.special_mode = self.b1100.special_mode
         e_of = view.e1100_of
         self.params.use_strings([d for d in self.profile.parameters if d.kind == "string"],
                                 self.profile.definitions.stringlet_offset)
