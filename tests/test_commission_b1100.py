@@ -140,3 +140,20 @@ def test_rig_with_a_model_per_node():
 
     models = {2: "B1100"}
     assert (model_of(models, 1), model_of(models, 2), model_of("B1100", 5)) == ("E1100", "B1100", "B1100")
+
+
+def test_ram_and_rom_through_one_selection_with_live_ram(tmp_path):
+    """--live-ram on a B1100 (no 06h): each parameter is selected, then written to RAM (01h) and ROM (02h); with
+    --no-reset the RAM holds the file's values at once."""
+    from linmot_st.pvl import load_pvl
+    from linmot_st.pvl.dataset import expected_exchanges, from_pvl
+
+    ds = from_pvl(load_pvl(B1100_FILE))
+    rep = run(tmp_path, B1100_FILE, "--force", "--live-ram", "--no-reset")
+    assert rep["transfer"]["exchanges"] == expected_exchanges(ds, live_ram=True) == 2 * (6 + 26 + 26) + 26
+    requests = sdo_requests(rep["_log"], 1)
+    writes = [k for k, r in enumerate(requests) if r[0] == 0x23 and index_sub(r) == (0x2000, 0x01)]
+    assert len(writes) == 26
+    for k in writes:
+        assert index_sub(requests[k - 1]) == (0x2000, 0xC0)
+        assert index_sub(requests[k + 1]) == (0x2000, 0x02) and requests[k + 1][4:8] == requests[k][4:8]
