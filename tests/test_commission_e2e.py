@@ -244,8 +244,21 @@ def test_progress_on_a_terminal_and_in_a_log():
 def test_virtual_bus_in_real_time():
     if os.environ.get("CI_NO_REALTIME"):
         pytest.skip("real-time tests disabled")
-    o = commission(axes=1, bus="virtual", verify=False)
+    # under load (tests/realtime.py): a run that failed after a host stall longer than 50 ms is measured again
+    from realtime import retry_after_stall
+
+    outcomes = []
+
+    def attempt():
+        outcomes.append(commission(axes=1, bus="virtual", verify=False))
+        return outcomes[-1].result
+
+    _, stalls = retry_after_stall(attempt, lambda r: outcomes[-1].axis(1).done and outcomes[-1].verification.ok)
+    o = outcomes[-1]
     ax = o.axis(1)
-    assert ax.done and o.verification.ok, o.report.text()
+    assert ax.done and o.verification.ok, (stalls, o.report.text())
     assert len(requests(o.result, 1)) == ax.exchanges                # the recorded trace holds every frame
-    assert o.result.wall_s >= (o.result.t_end_ns - o.result.t_start_ns) / 1e9 * 0.95   # PLC time ran with the wall clock
+    assert [p.phase for p in ax.phases] == ["start", "check", "preflight", "params", "curves", "ct", "flash"]
+    # PLC time runs with the wall clock and never ahead of it: an overrun moves the PLC's clock to the wall
+    # time in whole ticks (cosim.py), so this holds however loaded the machine
+    assert o.result.wall_s >= (o.result.t_end_ns - o.result.t_start_ns) / 1e9 * 0.95

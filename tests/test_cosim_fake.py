@@ -280,13 +280,19 @@ def test_real_time_cosim_step_paces_scans():
         sim = RealTimeCoSim(plc, bus, mailbox=MB)
         t0 = time.monotonic()
         sim.step(11)
+        # paced: 11 scans never take less than their 10 tick intervals, however loaded the machine
         assert time.monotonic() - t0 >= 0.049
-        assert sim.scans == 11 and plc.time_ns == 55_000_000
+        # a loaded machine starts a scan a tick or more late now and then (seen: 60 and 75 ms of PLC time
+        # under two CPU hogs): the PLC's clock then moves on by the ticks missed, counted; scans are never lost
+        assert sim.scans == 11 and plc.time_ns == 55_000_000 + sim.skipped_ticks * 5_000_000
+        assert sim.skipped_ticks == 0 or sim.overruns >= 1
 
 
 def test_real_time_cosim_step_one_in_a_loop_keeps_real_time():
     """step(1) in a caller's loop (the rig's step_until) is paced like one step(11): run flat out, a PLC
-    reached 2 s of its time in 0.3 s of wall time and timed out before the drive had booted."""
+    reached 2 s of its time in 0.3 s of wall time and timed out before the drive had booted. What holds under
+    load: the lower bound of the wall time, and the PLC's clock = the scans' ticks + the ticks that scans the
+    host made late skipped (counted)."""
     plc = FakePlc(lambda p: None, tick_ns=5_000_000)
     with open_bus(f"virtual:linmot-st-test-{uuid.uuid4().hex}") as bus:
         sim = RealTimeCoSim(plc, bus, mailbox=MB)
@@ -294,18 +300,27 @@ def test_real_time_cosim_step_one_in_a_loop_keeps_real_time():
         for _ in range(11):
             sim.step(1)
         assert time.monotonic() - t0 >= 0.049
-        assert sim.overruns == 0 and plc.time_ns == 55_000_000
+        assert sim.scans == 11 and plc.time_ns == 55_000_000 + sim.skipped_ticks * 5_000_000
+        assert sim.skipped_ticks == 0 or sim.overruns >= 1
 
 
 def test_real_time_cosim_a_caller_holding_the_plc_between_calls_is_no_overrun():
-    plc = FakePlc(lambda p: None, tick_ns=5_000_000)
-    with open_bus(f"virtual:linmot-st-test-{uuid.uuid4().hex}") as bus:
-        sim = RealTimeCoSim(plc, bus, mailbox=MB)
-        sim.step(2)
-        time.sleep(0.03)                                  # the test inspects the PLC for 6 ticks
-        t0 = time.monotonic()
-        sim.step(3)
-        assert time.monotonic() - t0 >= 0.009             # paced anew from the call: 2 ticks after its first
+    from realtime import measure_again_if_the_host_stalled
+
+    def attempt():
+        plc = FakePlc(lambda p: None, tick_ns=5_000_000)
+        with open_bus(f"virtual:linmot-st-test-{uuid.uuid4().hex}") as bus:
+            sim = RealTimeCoSim(plc, bus, mailbox=MB)
+            sim.step(2)
+            time.sleep(0.03)                              # the test inspects the PLC for 6 ticks
+            t0 = time.monotonic()
+            sim.step(3)
+            return sim, plc, time.monotonic() - t0
+
+    # a scan the host made late (under load) is an overrun of its own, not the hold: measured again then
+    sim, plc, elapsed = measure_again_if_the_host_stalled(attempt, lambda r: r[0].max_lateness_ns >= 5_000_000,
+                                                          attempts=10)
+    assert elapsed >= 0.009                               # paced anew from the call: 2 ticks after its first
     assert sim.overruns == 0 and sim.skipped_ticks == 0 and plc.time_ns == 25_000_000
 
 
@@ -318,13 +333,24 @@ def test_real_time_cosim_overrun_moves_the_plc_clock_to_the_wall_clock():
         if plc.scan_count == 2:
             extra[0] += 35_000_000
 
-    plc = FakePlc(program, tick_ns=10 * TICK)   # 10 ms ticks: host jitter stays far below one tick
-    with open_bus(f"virtual:linmot-st-test-{uuid.uuid4().hex}") as bus:
-        sim = RealTimeCoSim(plc, bus, mailbox=MB, clock=lambda: time.monotonic_ns() + extra[0])
-        sim.step(6)
+    from realtime import measure_again_if_the_host_stalled
+
+    def attempt():
+        extra[0] = 0
+        plc = FakePlc(program, tick_ns=10 * TICK)   # 10 ms ticks: host jitter stays far below one tick
+        with open_bus(f"virtual:linmot-st-test-{uuid.uuid4().hex}") as bus:
+            sim = RealTimeCoSim(plc, bus, mailbox=MB, clock=lambda: time.monotonic_ns() + extra[0])
+            sim.step(6)
+        sim.fake_plc = plc
+        return sim
+
+    # unless the loaded host adds lateness of its own (another overrun, or 5 ms or more on top of the injected
+    # 25 ms): measured again then
+    sim = measure_again_if_the_host_stalled(
+        attempt, lambda s: s.overruns != 1 or not 25_000_000 <= s.max_lateness_ns < 30_000_000, attempts=10)
     assert sim.scans == 6 and sim.overruns == 1 and sim.skipped_ticks == 2
     assert 25_000_000 <= sim.max_lateness_ns < 40_000_000
-    assert plc.time_ns == (6 + 2) * 10 * TICK            # every scan a tick, and the two missed ones
+    assert sim.fake_plc.time_ns == (6 + 2) * 10 * TICK   # every scan a tick, and the two missed ones
 
 
 @pytest.mark.parametrize("count", [33, 100, -1])

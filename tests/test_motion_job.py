@@ -113,9 +113,25 @@ def test_motion_command_refuses_bad_arguments(capsys):
     assert "linmot-st motion: error: argument --axes: 33: must be 1..32" in capsys.readouterr().err
 
 
-def test_motion_job_on_python_can_virtual_bus(tmp_path, capsys):
-    """Real time: the drive served by a NodeServer thread, the PLC by RealTimeCoSim; each has its own clock."""
-    rc = main(["motion", str(EXAMPLE), "--axes", "1", "--bus", "virtual", "-q"])
-    out = capsys.readouterr().out
-    assert rc == 0, out[-2000:]
-    assert "motion job: PASSED" in out
+def test_motion_job_on_python_can_virtual_bus(pvl, build):
+    """Real time: the drive served by a NodeServer thread, the PLC by RealTimeCoSim; each has its own clock.
+    Under load (tests/realtime.py): seen failing with NoProcessData (16#0704) after the host held the process
+    for about 300 ms (a 326 ms step in 30 scans), longer than the program's PdoTimeout; such a run is
+    measured again. What must hold is what the job checks (every step, in order) and no false success."""
+    from realtime import retry_after_stall
+
+    p = plan(pvl)
+
+    def attempt():
+        res = run_job(pvl, RunOptions(axes=1, bus="virtual"), build, p)
+        res.check = check_motion(res.after, p, res.drives) if res.after is not None else None
+        return res
+
+    def passed(res) -> bool:
+        return res.after is not None and res.after.finished and res.check.passed
+
+    res, stalls = retry_after_stall(attempt, passed)
+    assert passed(res), (stalls, res.max_lateness_ns, res.after and [s.what for s in res.check.steps if not s.ok])
+    ax = res.after.axes[0]
+    assert [r.index for r in ax.steps] == list(range(1, len(p.steps) + 1))       # every step, in order
+    assert len(res.check.steps) == len(p.steps)

@@ -251,6 +251,35 @@ def test_drive_reboot_during_a_transfer():
     assert b.fb("RD").run(UPID=LIVE).done      # the channel sent NMT Start again: usable
 
 
+def test_a_boot_up_copy_is_not_a_boot_but_a_later_or_heard_one_is():
+    """CAN double reception repeats a frame at once, before the sender's next one: a boot-up message within
+    BootDupWindow (2 ms) of the previous one with nothing heard from the drive in between is that copy
+    (DupBoots); one after the window, or after an answer or a heartbeat, is a boot (BootCount)."""
+    b = Bench(nodes=1)
+    b.step(5)
+    other = b.bus.endpoint("other")
+
+    def boot_up(after_ns: int, data: bytes = b"\x00") -> None:
+        b.bus.call_at(b.plc.time_ns + after_ns, lambda t: other.send(Frame(0x701, data), t))
+
+    def counts():
+        return b["AX1.BOOTCOUNT"], b["AX1.DUPBOOTS"]
+
+    n0, d0 = counts()
+    boot_up(100_000)
+    boot_up(1_300_000)                  # in the next scan: the copy
+    b.step(4)
+    assert counts() == (n0 + 1, d0 + 1)
+    boot_up(100_000)                    # 4 ms later: a boot again
+    b.step(3)
+    assert counts() == (n0 + 2, d0 + 1)
+    boot_up(100_000, b"\x7f")           # a heartbeat, then a boot-up within the window: a boot
+    boot_up(600_000)
+    b.step(3)
+    assert counts() == (n0 + 3, d0 + 1)
+    assert b.fb("RD").run(UPID=LIVE).done                   # the channel usable after it all
+
+
 def test_reset_waits_for_the_boot_up_and_restarts_the_node():
     b = Bench(nodes=1)
     assert b.fb("WR").run(UPID=LIVE, VALUE=1500, MEM="LM_RAM").done

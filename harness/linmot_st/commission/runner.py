@@ -365,11 +365,13 @@ def drive_model_of(node_id: int, opts: RunOptions, datasets=None) -> str:
     return model or "E1100"
 
 
-def emulated_drive(node_id: int, opts: RunOptions, datasets=None):
+def emulated_drive(node_id: int, opts: RunOptions, datasets=None, motion=None):
+    """An emulated drive for this run, of drive_model_of(); `motion`: its MotionSettings (the motion job places
+    the mechanics)."""
     from linmot_st.emulator import DriveTimings
     from linmot_st.emulator.models import make_drive
     timings = DriveTimings.fast() if opts.timing_kind() == "fast" else DriveTimings()
-    return make_drive(drive_model_of(node_id, opts, datasets), node_id, timings=timings)
+    return make_drive(drive_model_of(node_id, opts, datasets), node_id, timings=timings, motion=motion)
 
 
 def run(pvl, opts: RunOptions, build_result, *, dataset=None, datasets=None, progress=None,

@@ -72,7 +72,13 @@ def run_command(args: argparse.Namespace) -> int:
         return 1
     # per-node PVL files (--pvl NODE=FILE, e.g. a B1100 beside E1100s): the steps every axis can run
     others = [s.pvl for s in prep.datasets.sources if s.pvl is not prep.pvl] if prep.datasets else []
-    plan = make_plan(prep.pvl, args.position, others)
+    plan = make_plan(prep.pvl, args.position, others=others)
+    if plan.refusals:
+        # before any motion (and before commissioning): the file's own settings exclude a step
+        print(f"motion job: REFUSED before motion: {plan.stroke.describe()}")
+        for why in plan.refusals:
+            print(f"  {why}")
+        return 1
     if not args.quiet:
         print(f"built {prep.rel} with {prep.build.backend} "
               f"({'cached' if prep.build.cached else f'{prep.build_s:.1f} s'}); commissioning, then moving "

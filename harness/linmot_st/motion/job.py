@@ -175,9 +175,26 @@ def motion_phase(plan: Plan, timeout_s: float, progress=None, inhibit_100us: int
     return after
 
 
+def placed_drives(stroke, opts: RunOptions, datasets=None):
+    """A drive factory: the runner's emulated drive (of the series of its node's file, `datasets`) with the
+    mechanics `stroke` places."""
+    from linmot_st.commission.runner import emulated_drive
+
+    def factory(node: int):
+        drive = emulated_drive(node, opts, datasets, motion=stroke.settings())
+        stroke.store_home(drive)
+        return drive
+    return factory
+
+
 def run_job(pvl, opts: RunOptions, build_result, plan: Plan, *, dataset=None, progress=None,
             motion_progress=None, timeout_s: float = 60.0, inhibit_100us: int = 0, **kw) -> RunResult:
     """Commission, then move: the commissioning RunResult with the MotionResult in .after (None when the
-    commissioning failed)."""
+    commissioning failed). The emulated drives get the mechanics plan.stroke placed (unless the caller passes
+    its own drive_factory); a plan that cannot fit is refused (ValueError) before anything runs."""
+    if plan.refusals:
+        raise ValueError("the motion plan does not fit the axis: " + "; ".join(plan.refusals))
+    if plan.stroke is not None and kw.get("drive_factory") is None:
+        kw["drive_factory"] = placed_drives(plan.stroke, opts, kw.get("datasets"))
     return run(pvl, opts, build_result, dataset=dataset, progress=progress,
                after=motion_phase(plan, timeout_s, motion_progress, inhibit_100us), **kw)

@@ -16,6 +16,8 @@ from dataclasses import dataclass, field
 from linmot_st.protocol import commands as C
 from linmot_st.protocol.upids import P_CURVE_AMPLITUDE, P_CURVE_OFFSET, P_CURVE_TIME_SCALE, P_SCALE_POS
 
+from .stroke import Stroke, fit
+
 MM = 10_000                     # 0.1 um per mm
 MAX_STEPS = 24                  # T_PlcSteps
 MOVE_VELOCITY = 500.0           # mm/s
@@ -62,6 +64,7 @@ class Step:
     target_mm: float | None = None          # where the axis must be at the end of the step
     curve: CurveRun | None = None
     chain: list[int] = field(default_factory=list)   # CT: the entries the sequence runs
+    span_mm: tuple[float, float] | None = None       # the lowest and highest position the step visits
 
     def plc_value(self) -> dict:
         return {"KIND": STEP_KINDS[self.kind], "POSITION": self.position_mm, "VELOCITY": self.velocity,
@@ -72,6 +75,12 @@ class Step:
 class Plan:
     steps: list[Step]
     not_run: list[str]                      # what the PVL holds that the job does not run, and why
+    stroke: Stroke | None = None            # where the steps lie in the stroke; the emulated mechanics
+
+    @property
+    def refusals(self) -> list[str]:
+        """Why the file cannot run on this axis (said before any motion; empty: it can)."""
+        return self.stroke.refusals if self.stroke else []
 
 
 def _param(pvl, upid: int, default: int) -> int:
@@ -80,11 +89,11 @@ def _param(pvl, upid: int, default: int) -> int:
     return default if p is None else p.signed_value
 
 
-def _ct_chain(pvl, entry: int, scale_pos: int) -> tuple[list[int], float | None]:
-    """The entries a sequence from `entry` runs and the position its last absolute move goes to (pu); None
-    when the chain holds something else than absolute VAI moves and waits, or loops."""
+def _ct_chain(pvl, entry: int, scale_pos: int) -> tuple[list[int], list[int] | None]:
+    """The entries a sequence from `entry` runs and the positions its absolute moves go to (pu), the last one
+    last; None when the chain holds something else than absolute VAI moves and waits, or loops."""
     entries = {e.entry_id: e.block for e in pvl.command_table}
-    chain, target, k = [], None, entry
+    chain, targets, k = [], [], entry
     while k != 0xFFFF:
         if k in chain or k not in entries or len(chain) > 32:
             return chain, None
@@ -92,23 +101,24 @@ def _ct_chain(pvl, entry: int, scale_pos: int) -> tuple[list[int], float | None]
         b = entries[k]
         cid, params = C.command_id(b.motion_header), b.parameters
         if cid in (C.VAI_GO_TO_POS, C.PREDEF_VAI_GO_TO_POS):
-            target = struct.unpack_from("<i", params, 0)[0]
+            targets.append(struct.unpack_from("<i", params, 0)[0])
         elif cid == C.VAI16_GO_TO_POS:
-            target = struct.unpack_from("<h", params, 0)[0] * scale_pos
+            targets.append(struct.unpack_from("<h", params, 0)[0] * scale_pos)
         elif cid not in (C.NOP, C.WAIT_TIME, C.WAIT_MOTION_FINISHED, C.WAIT_IN_TARGET_POSITION):
             return chain, None
         k = b.linked_entry
-    return chain, target
+    return chain, targets or None
 
 
 def _same_curve(a, b) -> bool:
     return a.info_block == b.info_block and list(a.setpoints) == list(b.setpoints)
 
 
-def plan(pvl, position_mm: float = 50.0, others=()) -> Plan:
-    """The job's steps for `pvl`. `others`: the PVL files of other nodes on the bus (per-node datasets; every
-    axis runs the same steps): a curve or command-table step only where each of them holds the same curve or
-    command table (a B1100 file holds neither)."""
+def plan(pvl, position_mm: float = 50.0, settings=None, others=()) -> Plan:
+    """The steps; `settings`: the emulated drives' MotionSettings whose stroke the plan is fitted into.
+    `others`: the PVL files of other nodes on the bus (per-node datasets; every axis runs the same steps): a
+    curve or command-table step only where each of them holds the same curve or command table (a B1100 file
+    holds neither)."""
     steps = [Step("setup", "set up the PDOs (TxPDO1 event timer 50 ms)"), Step("power", "power (MC_Power)"),
              Step("home", "home (MC_Home)")]
     not_run: list[str] = []
@@ -134,19 +144,22 @@ def plan(pvl, position_mm: float = 50.0, others=()) -> Plan:
         start, end = run.position(0) / MM, run.position(run.duration_ns) / MM
         steps.append(Step("move", f"move to the start of curve {c.curve_id} ({start:g} mm)", position_mm=start,
                           target_mm=start, **move))
+        # linear between setpoints: the extremes are setpoints
+        ends = [run.offset + run.amplitude * y for y in (min(run.setpoints), max(run.setpoints))]
         steps.append(Step("curve", f"run curve {c.curve_id} {info.name} (040xh)", curve_id=c.curve_id,
-                          target_mm=end, curve=run))
+                          target_mm=end, curve=run, span_mm=(min(ends) / MM, max(ends) / MM)))
     scale_pos = _param(pvl, P_SCALE_POS, 1000)
     table = {e.entry_id: e.data for e in pvl.command_table}
     if pvl.command_table and any({e.entry_id: e.data for e in o.command_table} != table for o in others):
         not_run.append("command table: not the same on every axis (per-node PVL files)")
         table = {}
     for e in sorted(pvl.command_table if table else (), key=lambda e: e.entry_id):
-        chain, target = _ct_chain(pvl, e.entry_id, scale_pos)
-        if target is not None:
+        chain, targets = _ct_chain(pvl, e.entry_id, scale_pos)
+        if targets is not None:
             steps.append(Step("ct", f"start command-table entry {e.entry_id} {e.block.name} "
                                     f"(runs {', '.join(map(str, chain))})", entry=e.entry_id,
-                              target_mm=target / MM, chain=chain))
+                              target_mm=targets[-1] / MM, chain=chain,
+                              span_mm=(min(targets) / MM, max(targets) / MM)))
             break
     else:
         if table:
@@ -157,4 +170,18 @@ def plan(pvl, position_mm: float = 50.0, others=()) -> Plan:
         steps = steps[:MAX_STEPS - 2] + steps[-2:]
         not_run.append(f"{len(dropped)} step(s) beyond the {MAX_STEPS} plc_project holds: "
                        + "; ".join(s.label for s in dropped))
-    return Plan(steps, not_run)
+    _spans(steps)
+    spans = [(k, s.label, *s.span_mm) for k, s in enumerate(steps, 1) if s.span_mm is not None]
+    return Plan(steps, not_run, fit(pvl, spans, settings))
+
+
+def _spans(steps: list[Step]) -> None:
+    """Each move's span: from where the previous step left the axis to its target (the first from its target:
+    homing left the axis inside the stroke); a CT sequence from there over its targets."""
+    here = None
+    for s in steps:
+        if s.kind == "move" or (s.kind == "ct" and s.span_mm is not None):
+            pts = [s.target_mm] + ([here] if here is not None else []) + (list(s.span_mm) if s.span_mm else [])
+            s.span_mm = (min(pts), max(pts))
+        if s.target_mm is not None:
+            here = s.target_mm

@@ -41,11 +41,19 @@ class MotionReport:
                                 start_ms=round(r.t0_ns / 1e6, 1), time_ms=round(r.duration_ns / 1e6, 1),
                                 scans=r.scans, frames=_frames(self.trace, ax.node_id, r.t0_ns, r.t1_ns),
                                 ok=bool(chk and chk.ok), check=chk.what if chk else "",
+                                stroke=self._where(r.index),
                                 error=describe(r.error_id) if r.error_id else ""))
         return out
 
+    def _where(self, index: int) -> str:
+        span, stroke = self.m.plan.steps[index - 1].span_mm, self.m.plan.stroke
+        return stroke.where(*span) if span is not None and stroke is not None else ""
+
     def figures(self) -> dict:
+        stroke = self.m.plan.stroke
         return {"passed": self.passed, "axes": len(self.m.axes), "steps": len(self.m.plan.steps),
+                "stroke": stroke.describe() if stroke else "",
+                "stroke_mm": [stroke.negative_mm, stroke.positive_mm] if stroke else None,
                 "plc_time_ms": round((self.m.t1_ns - self.m.t0_ns) / 1e6, 1), "scans": self.m.scans,
                 "wall_s": round(self.m.wall_s, 3), "timed_out": self.m.timed_out,
                 "not_run": self.m.plan.not_run, "rows": self.rows(),
@@ -56,14 +64,18 @@ class MotionReport:
         lines = [f"motion job: {'PASSED' if f['passed'] else 'FAILED'}: {f['axes']} axis/axes, {f['steps']} steps "
                  f"each, {f['plc_time_ms'] / 1000:.2f} s of PLC time in {f['scans']} scans, "
                  f"{f['wall_s']:.1f} s wall" + (" (timed out)" if f["timed_out"] else "")]
+        if f["stroke"]:
+            lines.append(f"  {f['stroke']}")
         for ax in self.m.axes:
             lines.append(f"  axis {ax.axis} (node {ax.node_id}):"
                          + (f" FAILED at step {ax.fail_step}: {describe(ax.error_id)}"
                             + (f", drive error {ax.drive_error:04X}h" if ax.drive_error else "") if ax.error else ""))
-            lines.append(f"    {'#':>2}  {'step':<58} {'time ms':>9} {'scans':>6} {'frames':>6}  result")
+            lines.append(f"    {'#':>2}  {'step':<58} {'time ms':>9} {'scans':>6} {'frames':>6}  "
+                         f"{'in the stroke':<38}  result")
             for r in (r for r in f["rows"] if r["axis"] == ax.axis):
                 lines.append(f"    {r['step']:>2}  {r['label'][:58]:<58} {r['time_ms']:>9.1f} {r['scans']:>6} "
-                             f"{r['frames']:>6}  {'ok' if r['ok'] else 'FAILED'}: {r['check'] or r['error']}")
+                             f"{r['frames']:>6}  {r['stroke']:<38}  "
+                             f"{'ok' if r['ok'] else 'FAILED'}: {r['check'] or r['error']}")
         for item in f["not_run"]:
             lines.append(f"  not run: {item}")
         return "\n".join(lines) + "\n"
@@ -72,13 +84,16 @@ class MotionReport:
         f = self.figures()
         md = [f"# Motion job: {'PASSED' if f['passed'] else 'FAILED'}", "",
               f"{f['axes']} axis/axes, {f['steps']} steps each, {f['plc_time_ms'] / 1000:.2f} s of PLC time in "
-              f"{f['scans']} scans ({f['wall_s']:.1f} s wall).", ""]
+              f"{f['scans']} scans ({f['wall_s']:.1f} s wall).", ""] + ([f"The axis: {f['stroke']}.", ""]
+                                                                         if f["stroke"] else [])
         for ax in self.m.axes:
             md += [f"## Axis {ax.axis} (node {ax.node_id})", "", f"![axis {ax.axis}](motion-axis{ax.axis}.png)", "",
-                   "| # | step | start ms | time ms | scans | frames | result |", "|---|---|---|---|---|---|---|"]
+                   "| # | step | start ms | time ms | scans | frames | in the stroke | result |",
+                   "|---|---|---|---|---|---|---|---|"]
             for r in (r for r in f["rows"] if r["axis"] == ax.axis):
                 md.append(f"| {r['step']} | {r['label']} | {r['start_ms']} | {r['time_ms']} | {r['scans']} | "
-                          f"{r['frames']} | {'ok' if r['ok'] else 'FAILED'}: {r['check'] or r['error']} |")
+                          f"{r['frames']} | {r['stroke']} | {'ok' if r['ok'] else 'FAILED'}: "
+                          f"{r['check'] or r['error']} |")
             md.append("")
         if f["not_run"]:
             md += ["## Not run", ""] + [f"- {x}" for x in f["not_run"]] + [""]

@@ -140,6 +140,10 @@ class E1100View:
     def __contains__(self, upid: int) -> bool:
         return upid in self.by_upid
 
+    def write(self, upid: int, raw32: int, ram: bool, rom: bool) -> None:
+        """A write as over the bus, to the B1100 UPID of E1100 UPID `upid` (test and harness setup)."""
+        self.store.write(self[upid].upid, raw32, ram=ram, rom=rom)
+
     def set_variable(self, upid: int, value: int) -> None:
         p = self.by_upid.get(upid)
         if p is not None:
