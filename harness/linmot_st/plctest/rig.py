@@ -199,6 +199,28 @@ class Rig:
         """The first drive."""
         return next(iter(self.drives.values()))
 
+    def io(self, node: int | None = None):
+        """The I/O of a drive (the first by default): emulator/linmot/io.py's DriveIO (input, set_input,
+        pulse_train, analog_ramp, output, outputs)."""
+        return (self.drive if node is None else self.drives[node]).io
+
+    def set_input(self, name: str, level: float, *, at_ms: float | None = None, node: int | None = None) -> None:
+        """A drive input changes at at_ms (rig time; default now): a digital pin ("X4.6") to 0/1, or "X4.4" to
+        volts."""
+        drive = self.drive if node is None else self.drives[node]
+        with drive.lock:                    # a drive served in real time runs in its own thread
+            if self.bus is None:            # RealTimeRig: the drive's own clock
+                if at_ms is not None:
+                    raise ValueError("in real time an input changes now: at_ms is for the simulated bus")
+                t = drive.clock_now_ns()
+            else:
+                t = self.bus.now if at_ms is None else round(at_ms * 1e6)
+            t = max(t, drive.io.clock())
+            if name == "X4.4":
+                drive.io.set_analog(level, t)
+            else:
+                drive.io.set_input(name, int(level), t)
+
     # -- variables ---------------------------------------------------------------------------------------
     def __getitem__(self, path: str) -> Any:
         return self.plc[path]

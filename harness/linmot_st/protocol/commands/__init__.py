@@ -24,6 +24,10 @@ from .system import *  # noqa: F401,F403
 from .vai import *  # noqa: F401,F403
 from .curves import *  # noqa: F401,F403
 from .command_table import *  # noqa: F401,F403
+from .vai_variants import *  # noqa: F401,F403
+from .system_mc import *  # noqa: F401,F403
+from .io import *  # noqa: F401,F403
+from .triggered import *  # noqa: F401,F403
 
 
 def command_id(header: int) -> int:

@@ -28,6 +28,18 @@ class Kind(enum.Enum):
     TIME_CURVE = "time curve from the curve RAM"
     COMMAND_TABLE = "command-table control"
     WAIT = "command-table wait (acts only inside a command-table sequence)"
+    PREDEF_VAI_16BIT = "predefined VAI 16 bit: target in the 16-bit scaling, vmax/acc/dec from parameters"
+    VAI_PREDEF_ACC = "VAI predef acc: target and vmax in the command, acc/dec from the predefined parameters"
+    VAI_DEC_ACC = "VAI dec=acc: target, vmax and one value for acc and dec (and a max current) in the command"
+    VAI_16BIT_DEC_ACC = "VAI 16 bit dec=acc: target, vmax, acc=dec in the 16-bit interface scaling"
+    SELECT_CONTROLLER_SET = "select the active position-controller set (A/B)"
+    RESET = "restart the drive's firmware"
+    IO_OUTPUTS = "write interface outputs with a mask"
+    CLEAR_EVENTS = "clear the event handler"
+    ON_TRIGGER = "armed in the event handler, run on every trigger edge until 008xh"
+    VAI_CAPTURED = "VAI to the captured position plus an increment"
+    VAI_ANALOG = "VAI to the position the analog input X4.4 sets"
+    VAI_TRIG_CONFIG = "VAI with the Trig Rise / Trig Fall Config parameters"
 
 
 class Start(enum.Enum):
@@ -35,6 +47,7 @@ class Start(enum.Enum):
     DEMAND = "demand position and velocity"
     ACTUAL = "actual position and velocity"
     ACTUAL_AT_REST = "actual position, demand velocity 0"
+    AFTER_ACTUAL_COMMAND = "queued: from the demand position once the running motion has ended (one shot)"
 
 
 class Target(enum.Enum):
@@ -44,6 +57,10 @@ class Target(enum.Enum):
     FROM_START = "an increment on the start position"
     FROM_LAST_TARGET = "an increment on the last target"
     STOP = "no target: decelerate to standstill"
+    INFINITE_POSITIVE = "no target: to vmax in the positive direction, on until stopped"
+    INFINITE_NEGATIVE = "no target: to vmax in the negative direction, on until stopped"
+    TRANSITION_POSITIVE = "no target: the running VAI takes the new vmax/acc/dec where the demand passes it upwards"
+    TRANSITION_NEGATIVE = "no target: the running VAI takes the new vmax/acc/dec where the demand passes it downwards"
     NONE = "no position"
 
 
