@@ -52,7 +52,8 @@ class _SeriesDrive(E1100Drive):
 def test_runner_refuses_before_any_frame(pvl_file, factory, names):
     pvl = load_pvl(pvl_file) if pvl_file else example()
     bus_seen = []
-    hooks = {"drive_factory": factory} if factory else {}
+    # without a factory the runner would give node 1 a B1100 (the series of its file): ask for E1100s
+    hooks = {"drive_factory": factory} if factory else {"drive_model": "E1100"}
     with pytest.raises(DriveTypeMismatch) as err:
         commission(pvl=pvl, axes=2, prepare_bus=lambda bus, drives: bus_seen.append(bus), **hooks)
     assert all(n in str(err.value) for n in names) and "node 1" in str(err.value)

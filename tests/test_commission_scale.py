@@ -132,11 +132,6 @@ def test_pvl_option_missing_file(tmp_path, capsys):
     assert "none.pvl" in capsys.readouterr().err
 
 
-def test_motion_refuses_per_node_datasets(capsys):
-    assert main(["motion", str(EXAMPLE), "-q", "--axes", "2", "--pvl", f"2={EXAMPLE}"]) == 2
-    assert "--pvl" in capsys.readouterr().err
-
-
 def test_32_axes_at_500_kbits_with_real_timings_are_heard_after_their_reset_thanks_to_the_drain():
     """The example dataset on 32 drives at 500 kbit/s with the drives' real timings (flash, reset, boot): while
     the first axes verify, the bus is busy all the time and a boot-up message (700h + node, the lowest

@@ -89,3 +89,10 @@ def test_sigterm_stops_like_ctrl_c():
     assert proc.returncode == 0, err
     assert "Traceback" not in err and err == ""
     assert out.strip().startswith("E1100 node 1 stopped in NMT state")
+
+
+def test_a_b1100_is_served_at_its_default_node_id_63(capsys):
+    rc, out, err = _emulate(capsys, "--interface", "virtual", "--channel", f"cli-{uuid.uuid4().hex[:8]}",
+                            "--drive", "b1100", "--duration", "0", "--fast")
+    assert rc == 0, err
+    assert out.startswith("B1100 node 63 on virtual:")

@@ -93,13 +93,13 @@ def test_a_model_in_the_table_is_built_by_name(model, monkeypatch):
     monkeypatch.setitem(MODELS, model.name, model)
     assert model_named("t1") is model
     assert make_drive("T1", NODE).model is model
-    with pytest.raises(ValueError, match=r"no drive model 'B9' \(known: E1100, T1\)"):
+    with pytest.raises(ValueError, match=r"no drive model 'B9' \(known: B1100, E1100, T1\)"):
         make_drive("B9", NODE)
 
 
 def test_emulate_refuses_an_unknown_model(capsys):
     assert main(["emulate", "--interface", "virtual", "--channel", "x", "--drive", "B9"]) == 2
-    assert "--drive B9: no drive model 'B9' (known: E1100)" in capsys.readouterr().err
+    assert "--drive B9: no drive model 'B9' (known: B1100, E1100)" in capsys.readouterr().err
 
 
 def test_a_quirk_changes_each_drive_of_its_model_only():

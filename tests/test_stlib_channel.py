@@ -351,77 +351,56 @@ def test_sequencer_chains_services_without_wasted_scans():
     assert [b.drive.rom(u) for u in upids] == values
 
 
-class FakeB1100:
-    """Just enough of a B1100: boot-up, NMT, and parameter access through 2000h sub C0h, 01h, 02h."""
-
-    def __init__(self, node_id: int):
-        self.node_id = node_id
-        self.ram = {0xE9E7: -292 & 0xFFFFFFFF, 0x7078: 0, 0x2CA1: 1, 0x2C96: 3, 0x2C97: 1}
-        self.rom = dict(self.ram)
-        self.selected = None
-        self.requests = []
-
-    def power_on(self, t):
-        return [(t + MS, Frame(0x700 + self.node_id, b"\x00"))]
-
-    def on_frame(self, frame, t):
-        if frame.can_id != 0x600 + self.node_id:
-            return []
-        d = frame.data
-        self.requests.append(bytes(d))
-        index, sub = int.from_bytes(d[1:3], "little"), d[3]
-
-        def answer(data):
-            return [(t + 100_000, Frame(0x580 + self.node_id, data))]
-        if index != 0x2000 or sub not in (0x01, 0x02, 0xC0):
-            return answer(bytes([0x80]) + d[1:4] + (0x06090011).to_bytes(4, "little"))
-        if sub == 0xC0:
-            self.selected = int.from_bytes(d[4:6], "little")
-            return answer(bytes([0x60]) + d[1:4] + bytes(4))
-        store = self.ram if sub == 1 else self.rom
-        if d[0] == 0x40:
-            return answer(bytes([0x43]) + d[1:4] + store.get(self.selected, 0).to_bytes(4, "little"))
-        store[self.selected] = int.from_bytes(d[4:8], "little")
-        return answer(bytes([0x60]) + d[1:4] + bytes(4))
-
-    def on_timer(self, t):
-        return []
-
-    def next_timer_ns(self):
-        return None
+def b1100_requests(b, node: int = 63) -> list[bytes]:
+    return [bytes(e.frame.data) for e in b.sdo_trace(node) if e.frame.can_id == 0x600 + node]
 
 
 def test_b1100_parameter_access_through_c0h():
+    """The ST's B1100 paths against the emulated B1100 (emulator/linmot/b1100.py): select + access, strings
+    at UPID + 0, the layer UPIDs of seed 000 Table 4, and what the B1100 lacks refused before any frame."""
+    from linmot_st.emulator import DriveTimings
+    from linmot_st.emulator.models import make_drive
+
     b = Bench(nodes=0, enable=False)
-    fake = FakeB1100(63)
-    b.bus.attach(fake, "b1100")
-    b.bus.call_at(0, lambda t: b.bus._queue_all(b.bus._parts_by_name["b1100"], t, fake.power_on(t)))
+    drive = make_drive("B1100", 63, timings=DriveTimings.fast())
+    b.bus.attach(drive, "b1100")
+    drive.power_on(0)
     b["CH1.NODEID"] = 63
     b["CH1.DRIVE"] = "LM_B1100"
     b["CH1.ENABLE"] = True
-    b.sim.run_until(lambda: b["AX1.BOOTCOUNT"] >= 1, max_scans=100)
-    r = b.fb("RD").run(UPID=0xE9E7, MEM="LM_RAM")
-    assert r.done and r["VALUE"] == -292 and r.scans == 3               # select + read
-    assert fake.requests[-2] == bytes.fromhex("23 00 20 C0 E7 E9 00 00")
-    assert fake.requests[-1] == bytes.fromhex("40 00 20 01 00 00 00 00")
-    r = b.fb("WR").run(UPID=0xE9E7, VALUE=-100, MEM="LM_RAM_ROM")
-    assert r.done and r.scans == 4                                       # select + RAM + ROM
-    assert fake.ram[0xE9E7] == fake.rom[0xE9E7] == -100 & 0xFFFFFFFF
+    b.sim.run_until(lambda: b["AX1.BOOTCOUNT"] >= 1, max_scans=1000)
+    b.step(2)
+    r = b.fb("RD").run(UPID=0xE19C, MEM="LM_ROM")
+    assert r.done and r["VALUE"] == drive.rom(0xE19C) and r.scans == 3            # select + read
+    sent = b1100_requests(b)
+    assert sent[-2] == bytes.fromhex("23 00 20 C0 9C E1 00 00")
+    assert sent[-1] == bytes.fromhex("40 00 20 02 00 00 00 00")
+    r = b.fb("WR").run(UPID=0xE19C, VALUE=2500, MEM="LM_RAM_ROM")
+    assert r.done and r.scans == 4                                                  # select + RAM + ROM
+    assert drive.ram(0xE19C) == drive.rom(0xE19C) == 2500
     r = b.fb("SWR").run(UPID=0x7078, COUNT=3, TEXT="X Axis Left", MEM="LM_RAM")
-    assert r.done                                                        # B1100: stringlet 1 = the UPID
-    assert [fake.ram[u] for u in (0x7078, 0x7079, 0x707A)] == [0x78412058, 0x4C207369, 0x00746665]
+    assert r.done                                                                   # stringlet 1 = the UPID
+    assert [drive.ram(u) for u in (0x7078, 0x7079, 0x707A)] == [0x78412058, 0x4C207369, 0x00746665]
+    assert drive.string(0x7078, "ram") == "X Axis Left"
     assert b.fb("SRD").run(UPID=0x7078, COUNT=3)["TEXT"] == "X Axis Left"
+    r = b.fb("RD").run(UPID=0x6061, MEM="LM_RAM")                                   # a variable: the MC's
+    assert r.done and r["VALUE"] == drive.mc.words[0]
+    r = b.fb("WR").run(UPID=0x6061, VALUE=1, MEM="LM_RAM")
+    assert r.error                                                                  # read-only: the drive's abort
     for fb, inputs in [("RD", dict(UPID=1, MEM="LM_MIN")), ("CG", dict(CURVEID=1)), ("CTRD", dict(ENTRY=1)),
                        ("DEF", dict(LAYER=1)), ("UL", dict(STARTUPID=0)), ("CTPRES", {}), ("FS", dict(CURVES=True))]:
-        before = len(fake.requests)
+        before = len(b1100_requests(b))
         r = b.fb(fb).run(**inputs)
         assert r.error and r.scans == 1, fb
         assert r.error_id in (E["NotSupported"], E["InvalidMem"]), fb
         b.step(2)
-        assert len(fake.requests) == before, fb                         # refused before any frame
-    lc = b.fb("LC").run(LAYER=1, CHECK=True, SOURCE={"TREEID": 1, "MAINVERSION": 3, "SUBVERSION": 0})
-    assert lc.done and lc.scans == 7                                     # 3 x (select + read), B1100 UPIDs
-    assert lc["DRIVE"] == {"TREEID": 1, "MAINVERSION": 3, "SUBVERSION": 1} and lc["COMPATIBLE"]
+        assert len(b1100_requests(b)) == before, fb                                # refused before any frame
+    lc = b.fb("LC").run(LAYER=1, CHECK=True, SOURCE={"TREEID": 257, "MAINVERSION": 3, "SUBVERSION": 0})
+    assert lc.done and lc.scans == 7                                                # 3 x (select + read)
+    assert lc["DRIVE"] == {"TREEID": 257, "MAINVERSION": 3, "SUBVERSION": 0} and lc["COMPATIBLE"]
+    # no frame of the run addresses 2000h + UPID: every parameter access went through the selection
+    assert all(int.from_bytes(d[1:3], "little") in (0x2000, 0x1017, 0x1000) or int.from_bytes(d[1:3], "little") < 0x2000
+               for d in b1100_requests(b))
 
 
 def test_reset_fb_no_longer_called_does_not_disable_heartbeat_monitoring():

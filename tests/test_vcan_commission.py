@@ -69,3 +69,27 @@ def test_the_motion_job_on_vcan0(tmp_path):
     ids = {m.arbitration_id for m in dump.messages()}
     assert {0x181, 0x281, 0x201, 0x301, 0x401} <= ids, sorted(hex(i) for i in ids)   # the PDOs were on vcan0
 
+
+
+def test_one_b1100_served_by_another_process_is_commissioned_through_the_selection(tmp_path):
+    """`linmot-st emulate --drive B1100` at its default node ID 63; the PLC commissions it from the B1100 file
+    (its axis' Drive from the file's series): every parameter access on the bus is 2000h sub C0h, then 01h/02h."""
+    from pathlib import Path
+
+    from linmot_st.pvl import load_pvl
+
+    b1100_file = Path(EXAMPLE).with_name("b1100_axis.pvl")
+    with EmulatedDrives([63], tmp_path, model="B1100") as drives:
+        with Candump(tmp_path / "bus.log") as dump:
+            res = linmot_st("commission", str(b1100_file), "--bus", "socketcan:vcan0", "--no-emulate", "-q",
+                            "--node-ids", "63")
+    assert res.returncode == 0 and "result: PASSED" in res.stdout, res.stdout + res.stderr
+    assert drives.clean_exit() == ""
+    verification = verify(load_pvl(b1100_file), drives.drives(),
+                          RunOptions(bus="socketcan:vcan0", node_ids=[63], **COMMAND_OPTIONS))
+    assert verification.ok, [c for c in verification.checks if not c.ok]
+    requests = [data for cob, data in sdo_frames(dump.messages(), 63) if cob == 0x600 + 63]
+    assert requests and all(data[1:3] == b"\x00\x20" or int.from_bytes(data[1:3], "little") < 0x2000
+                            for data in requests)
+    accesses = [k for k, data in enumerate(requests) if data[1:4] in (b"\x00\x20\x01", b"\x00\x20\x02")]
+    assert accesses and all(requests[k - 1][1:4] == b"\x00\x20\xC0" for k in accesses)

@@ -38,6 +38,19 @@ def _node_pvl(text: str) -> tuple[int, str]:
     return n, path
 
 
+def _node_model(text: str) -> tuple[int, str]:
+    from linmot_st.emulator.models import model_named
+    node, sep, name = text.partition("=")
+    try:
+        n = int(node)
+        if not sep or not 1 <= n <= 127:
+            raise ValueError
+        return n, model_named(name).name
+    except ValueError as exc:
+        why = f": {exc}" if str(exc) else ""
+        raise argparse.ArgumentTypeError(f"{text!r}: NODE=MODEL with a node ID 1..127, e.g. 2=B1100{why}") from None
+
+
 def _task_interval(text: str) -> int:
     from .project import parse_task_interval
     try:
@@ -94,6 +107,8 @@ def command_line(args: argparse.Namespace) -> str:
         parts += ["--node-ids", ",".join(map(str, args.node_ids))]
     for node, path in getattr(args, "pvl", None) or ():
         parts += ["--pvl", f"{node}={path}"]
+    for node, model in getattr(args, "drive", None) or ():
+        parts += ["--drive", f"{node}={model}"]
     if args.curve_memory is not None:
         parts += ["--curve-memory", str(args.curve_memory)]
     if getattr(args, "task_interval", None) is not None:
@@ -138,6 +153,9 @@ def add_run_arguments(p, *, timings_default: str) -> None:
                    help="their CANopen node IDs, comma-separated (default 1..N)")
     p.add_argument("--pvl", type=_node_pvl, action="append", default=[], metavar="NODE=FILE",
                    help="the dataset of this node (repeat for others); the nodes without one get FILE.pvl")
+    p.add_argument("--drive", type=_node_model, action="append", default=[], metavar="NODE=MODEL",
+                   help="the emulated drive of this node (E1100, B1100; repeat for others); default: the series "
+                        "its PVL file is for")
     p.add_argument("--bus", default="sim", metavar="BUS",
                    help="sim (default: simulated bus, virtual time), virtual[:CHANNEL] (python-can, real time), "
                         "socketcan:CHANNEL, or INTERFACE:CHANNEL")
@@ -197,7 +215,8 @@ def prepare_run(args: argparse.Namespace, *, flash: bool = True, reset: bool = T
     opts = RunOptions(axes=axes, node_ids=args.node_ids, bus=args.bus, bitrate=args.bitrate,
                       live_ram=live_ram, flash=flash, reset=reset, verify=verify,
                       preflight=args.preflight, curve_memory=args.curve_memory,
-                      timings=timings, timeout_s=args.timeout, emulate=emulate, force=force)
+                      timings=timings, timeout_s=args.timeout, emulate=emulate, force=force,
+                      drive_models=dict(getattr(args, "drive", None) or ()))
     try:
         opts.nodes()
         check_bus_spec(opts.bus)
@@ -212,6 +231,9 @@ def prepare_run(args: argparse.Namespace, *, flash: bool = True, reset: bool = T
         raise UsageError(str(e)) from None
     per_node = {}
     nodes = opts.nodes()
+    for node, model in getattr(args, "drive", None) or ():
+        if node not in nodes:
+            raise UsageError(f"--drive {node}={model}: node {node} is not commissioned (node IDs {nodes})")
     for node, path in getattr(args, "pvl", None) or ():
         if node not in nodes:
             raise UsageError(f"--pvl {node}={path}: node {node} is not commissioned (node IDs {nodes})")
@@ -290,7 +312,8 @@ def run_command(args: argparse.Namespace) -> int:
               f"drive(s) on {'the simulated bus' if prep.opts.simulated else prep.opts.bus}", file=err)
     progress = None if args.quiet else Progress(err)
     try:
-        factory = _remembering_drives(args.drive_memory, prep.opts) if args.drive_memory else None
+        factory = (_remembering_drives(args.drive_memory, prep.opts, prep.datasets) if args.drive_memory
+                   else None)
         result = run(prep.pvl, prep.opts, prep.build, datasets=prep.datasets, progress=progress,
                      drive_factory=factory)
         if args.drive_memory:
@@ -313,13 +336,13 @@ def _memory_file(folder: str, node: int):
     return Path(folder) / f"node{node}.json"
 
 
-def _remembering_drives(folder: str, opts):
+def _remembering_drives(folder: str, opts, datasets=None):
     """A drive factory: each emulated drive with the memory a previous run left in `folder` (if any)."""
     from linmot_st.emulator.linmot import memory
     from .runner import emulated_drive
 
     def factory(node: int):
-        drive = emulated_drive(node, opts)
+        drive = emulated_drive(node, opts, datasets)
         path = _memory_file(folder, node)
         if path.exists():
             memory.load(drive, memory.read(path))

@@ -45,9 +45,10 @@ def necessary_exchanges(ds: Dataset, opts, transfer_only: bool = False) -> int:
     read of the dataset (`expected_exchanges`), and, for the whole run, the flash services with one poll per
     store (the FB must poll at least once to learn the save ended) and the reset request."""
     preflight = getattr(opts, "preflight", True)
+    live_ram = getattr(opts, "live_ram", False)
     if transfer_only:
-        return expected_exchanges(ds, verify=opts.verify, flash=False, preflight=preflight)
-    n = expected_exchanges(ds, verify=opts.verify, flash=opts.flash, preflight=preflight)
+        return expected_exchanges(ds, verify=opts.verify, flash=False, preflight=preflight, live_ram=live_ram)
+    n = expected_exchanges(ds, verify=opts.verify, flash=opts.flash, preflight=preflight, live_ram=live_ram)
     if opts.flash and (ds.curves or ds.entries):
         n += (1 if ds.curves else 0) + (1 if ds.entries else 0)
     return n + (1 if opts.reset else 0)

@@ -66,7 +66,10 @@ class RunOptions:
     latency_ns: int = 0                        # extra latency of the drives' frames on the simulated bus
     timeout_s: float | None = None             # virtual (sim) or wall seconds; default from the dataset
     emulate: bool = True                       # False: real drives on the bus (python-can buses only)
-    drive_model: str = "E1100"                 # the emulated drives' model (emulator/models.py)
+    drive_model: str | None = None             # the emulated drives' model (emulator/models.py); None: each
+                                               # node's drive is of the series its PVL file is for
+    drive_models: dict = field(default_factory=dict)   # node ID -> model (`--drive NODE=MODEL`), before both
+    series: dict = field(default_factory=dict)  # node ID -> the series its PVL file is for (set by run())
     fast_idle: bool = True                     # sim: idle scans run in C (linmot_st.cosim); False: every scan
                                                # from Python (the same frames at the same times, slower)
 
@@ -177,6 +180,9 @@ class RunResult:
     wear_before: dict = field(default_factory=dict)  # node ID -> drive_wear() when switched on
     wear_after: dict = field(default_factory=dict)   # and at the end of the run
     after: Any = None                          # what run(after=...) returned (the motion job's result)
+    ram_commissioned: dict = field(default_factory=dict)  # node -> {UPID: RAM} before run(after=...): what
+                                               # the commissioning left, for the verification (a move's
+                                               # live parameter writes come later)
     datasets: Any = None                       # datasets.Datasets: each node's PVL and dataset
 
     @property
@@ -286,12 +292,15 @@ def drive_wear(drive) -> dict:
                 rom_writes=drive.params.rom_writes)
 
 
-def _configure(plc, opts: RunOptions, nodes: list[int], curve_memory: int = 0, bases: list[int] | None = None
-               ) -> None:
+def _configure(plc, opts: RunOptions, nodes: list[int], curve_memory: int = 0, bases: list[int] | None = None,
+               drives_series: dict[int, str] | None = None) -> None:
+    """The program's settings; `drives_series` {node: "E1100" | "B1100"} gives each axis its channel's Drive."""
     p = INSTANCE
     plc[f"{p}.AXES"] = len(nodes)
     plc[f"{p}.NODEIDS"] = node_id_table(nodes)
     plc[f"{p}.DATABASES"] = (bases or [1] * len(nodes)) + [1] * (MAX_AXES - len(nodes))
+    series = [f"LM_{(drives_series or {}).get(n, 'E1100')}" for n in nodes]
+    plc[f"{p}.DRIVES"] = series + ["LM_E1100"] * (MAX_AXES - len(nodes))
     plc[f"{p}.WAITBOOT"] = opts.emulate            # emulated drives are switched on with the PLC
     plc[f"{p}.LIVERAM"] = opts.live_ram
     plc[f"{p}.FLASH"] = opts.flash
@@ -347,12 +356,22 @@ def run_timeout_s(datasets, nodes: list[int], opts: RunOptions) -> float:
     return slowest + 4 * exchanges * 2 * max_bus_bits(8) / opts.bitrate
 
 
-def emulated_drive(node_id: int, opts: RunOptions, motion=None):
-    """An emulated drive for this run; `motion`: its MotionSettings (the motion job places the mechanics)."""
+def drive_model_of(node_id: int, opts: RunOptions, datasets=None) -> str:
+    """The model of a node's emulated drive: `--drive NODE=MODEL`, else RunOptions.drive_model, else the
+    series the node's PVL file is for (so a B1100 file gets an emulated B1100), else the E1100."""
+    model = opts.drive_models.get(node_id) or opts.drive_model
+    if model is None and datasets is not None:
+        model = datasets.of(node_id).pvl.drive_type.name
+    return model or "E1100"
+
+
+def emulated_drive(node_id: int, opts: RunOptions, datasets=None, motion=None):
+    """An emulated drive for this run, of drive_model_of(); `motion`: its MotionSettings (the motion job places
+    the mechanics)."""
     from linmot_st.emulator import DriveTimings
     from linmot_st.emulator.models import make_drive
     timings = DriveTimings.fast() if opts.timing_kind() == "fast" else DriveTimings()
-    return make_drive(opts.drive_model, node_id, timings=timings, motion=motion)
+    return make_drive(drive_model_of(node_id, opts, datasets), node_id, timings=timings, motion=motion)
 
 
 def run(pvl, opts: RunOptions, build_result, *, dataset=None, datasets=None, progress=None,
@@ -375,14 +394,23 @@ def run(pvl, opts: RunOptions, build_result, *, dataset=None, datasets=None, pro
         datasets = Datasets(Source(pvl, dataset or from_pvl(pvl), getattr(pvl, "filename", None) or "PVL"))
     timeout_s = opts.timeout_s or run_timeout_s(datasets, nodes, opts)
     plc = Plc(build_result)
-    factory = _checked_factory(drive_factory or (lambda n: emulated_drive(n, opts)), datasets)
+    factory = _checked_factory(drive_factory or (lambda n: emulated_drive(n, opts, datasets)), datasets)
     bases = datasets.bases(nodes)
+    opts.series = {n: datasets.of(n).pvl.drive_type.name for n in nodes}   # each axis' Drive (the PLC's setting)
     if opts.simulated:
         res = _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, timeout_s, after, bases)
     else:
         res = _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s, after, bases)
     res.datasets = datasets
     return res
+
+
+def _ram_of(drives: dict) -> dict:
+    out = {}
+    for n, d in drives.items():
+        with d.lock:                    # a real-time drive runs in its own thread
+            out[n] = {p.upid: p.ram for p in d.params}
+    return out
 
 
 def _checked_factory(factory, datasets):
@@ -415,7 +443,7 @@ def _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, time
     if prepare_bus:
         prepare_bus(bus, drives)
     sim = CoSim(plc, bus, mailbox=MAILBOX, name="plc", fast_idle=opts.fast_idle)
-    _configure(plc, opts, nodes, _curve_memory(opts, drives), bases)
+    _configure(plc, opts, nodes, _curve_memory(opts, drives), bases, opts.series)
     if prepare_plc:
         prepare_plc(plc)
     sampler = Sampler(plc, nodes, progress)
@@ -434,10 +462,11 @@ def _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, time
     sampler.close()
     _collect(plc, sampler)
     commissioned = all(a.done for a in sampler.axes) and not timed_out and not fault
+    ram_commissioned = _ram_of(drives) if after is not None else {}
     after_result = after(plc, sim, drives) if after is not None and commissioned else None
     res = RunResult(opts, nodes, plc.tick_ns, bus.bit_ns, sampler.axes, list(bus.trace), drives,
                     scans=sim.scans, wall_s=wall, timed_out=timed_out, fault=fault, before=before,
-                    interrupted=interrupted, after=after_result, wear_before=wear_before,
+                    interrupted=interrupted, after=after_result, ram_commissioned=ram_commissioned, wear_before=wear_before,
                     wear_after={n: drive_wear(d) for n, d in drives.items()})
     res.stats = bus.stats(res.t_start_ns, max(res.t_end_ns, res.t_start_ns))
     return res
@@ -514,7 +543,7 @@ def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s, a
         for b, d in zip(drive_buses, drives.values()):
             d.attach(b)                                  # switched on now: boots after its boot time
         sim = RealTimeCoSim(plc, plc_bus, mailbox=MAILBOX, echo=echo)
-        _configure(plc, opts, nodes, _curve_memory(opts, drives), bases)
+        _configure(plc, opts, nodes, _curve_memory(opts, drives), bases, opts.series)
         if prepare_plc:
             prepare_plc(plc)
         sampler = Sampler(plc, nodes, progress)
@@ -533,6 +562,7 @@ def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s, a
         wall = time.perf_counter() - wall0
         sampler.close()
         commissioned = all(a.done for a in sampler.axes) and not timed_out and not fault
+        ram_commissioned = _ram_of(drives) if after is not None else {}
         after_result = after(plc, sim, drives) if after is not None and commissioned else None
     finally:
         for d in drives.values():
@@ -547,7 +577,7 @@ def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s, a
     res = RunResult(opts, nodes, plc.tick_ns, bit_ns, sampler.axes, trace, drives, scans=sim.scans,
                     wall_s=wall, timed_out=timed_out, fault=fault, overruns=sim.overruns,
                     max_lateness_ns=sim.max_lateness_ns, skipped_ticks=sim.skipped_ticks, before=before,
-                    interrupted=interrupted, after=after_result, wear_before=wear_before,
+                    interrupted=interrupted, after=after_result, ram_commissioned=ram_commissioned, wear_before=wear_before,
                     wear_after={n: drive_wear(d) for n, d in drives.items()})
     res.stats = bus_stats(trace, bit_ns, res.t_start_ns, max(res.t_end_ns, res.t_start_ns))
     return res

@@ -60,7 +60,10 @@ def _add(check: Check, line: str) -> None:
         check.differences.append("...")
 
 
-def _params(pvl, drive, node: int, opts) -> list[Check]:
+def _params(pvl, drive, node: int, opts, ram_at: dict | None = None) -> list[Check]:
+    """ROM and RAM of each PVL parameter on the drive; RAM as `ram_at` {UPID: RAM} has it where given (the
+    state when the commissioning ended, before a motion job's live writes)."""
+    ram_at = ram_at or {}
     rom = Check(node, "parameters ROM")
     ram = Check(node, "parameters RAM", required=False)
     pending = 0
@@ -78,11 +81,12 @@ def _params(pvl, drive, node: int, opts) -> list[Check]:
             else:
                 _add(rom, f"{p.upid:04X}h {p.caption}: ROM {d.rom}, PVL {expected} ({p.value:08X}h)")
             must = opts.reset or (opts.live_ram and d.live)
-            if d.ram == expected:
+            ram_value = ram_at.get(p.upid, d.ram)
+            if ram_value == expected:
                 ram.equal += 1
             elif must:
                 ram.required = True
-                _add(ram, f"{p.upid:04X}h {p.caption}: RAM {d.ram}, PVL {expected}")
+                _add(ram, f"{p.upid:04X}h {p.caption}: RAM {ram_value}, PVL {expected}")
             else:
                 pending += 1
     if pending:
@@ -165,8 +169,8 @@ BEFORE_WRITES = {"wait": "while waiting for the drive", "start": "in the dataset
                  "check": "in the compatibility check", "preflight": "in the pre-flight check"}
 
 
-def verify(pvl, drives: dict, opts, *, before: dict | None = None, stopped_before_writes: dict[int, str] | None = None
-           ) -> Verification:
+def verify(pvl, drives: dict, opts, *, before: dict | None = None, stopped_before_writes: dict[int, str] | None = None,
+           ram_at: dict | None = None) -> Verification:
     """Compare each emulated drive with the PVL content (see the module docstring). `before`: drive_state()
     of each node when it was switched on; `stopped_before_writes`: node -> phase (BEFORE_WRITES) of the nodes
     whose FB failed before its first write (nothing may have been written to them)."""
@@ -193,7 +197,7 @@ def verify(pvl, drives: dict, opts, *, before: dict | None = None, stopped_befor
                 continue
             same.note = f"the run stopped {where}, yet the drive changed"
         if has_params:
-            v.checks += _params(pvl, drive, node, opts)
+            v.checks += _params(pvl, drive, node, opts, (ram_at or {}).get(node))
         stores = ["RAM", "flash"] if opts.flash else ["RAM"]
         if curves:
             for name in stores:
@@ -216,14 +220,16 @@ def verify_run(pvl, result) -> Verification:
     others = {a.node_id for a in result.axes if a not in early}      # another axis on the node may write
     stopped = {a.node_id: a.fail_phase for a in early if a.node_id not in others}
     drives = result.drives if opts.emulate else {}
+    ram_at = getattr(result, "ram_commissioned", None)
     datasets = getattr(result, "datasets", None)
     if datasets is None or datasets.single or not drives:
-        return verify(pvl, drives, opts, before=result.before, stopped_before_writes=stopped)
+        return verify(pvl, drives, opts, before=result.before, stopped_before_writes=stopped, ram_at=ram_at)
     # per-node datasets: each drive against its own PVL file
     out = Verification()
     for source in datasets.sources:
         mine = {n: d for n, d in drives.items() if datasets.of(n) is source}
         if mine:
-            out.checks += verify(source.pvl, mine, opts, before=result.before, stopped_before_writes=stopped).checks
+            out.checks += verify(source.pvl, mine, opts, before=result.before, stopped_before_writes=stopped,
+                                 ram_at=ram_at).checks
     out.checks.sort(key=lambda c: c.node)
     return out

@@ -16,7 +16,8 @@ def register(subparsers) -> None:
                     "e.g. --interface socketcan --channel vcan0, until Ctrl-C or SIGTERM.")
     p.add_argument("--interface", required=True, help="python-can interface (socketcan, virtual, pcan, ...)")
     p.add_argument("--channel", required=True, help="python-can channel (vcan0, can0, a virtual channel name)")
-    p.add_argument("--node-id", type=int_range(1, 127), default=1, help="CANopen node ID 1..127 (default 1)")
+    p.add_argument("--node-id", type=int_range(1, 127), default=None,
+                   help="CANopen node ID 1..127 (default: the model's, 1 for the E1100, 63 for the B1100)")
     p.add_argument("--bitrate", type=can_bitrate, default=500_000,
                    help="bit rate in bit/s (default 500000, the E1100 default; SocketCAN: set with `ip link`)")
     p.add_argument("--drive", default="E1100", metavar="MODEL",
@@ -78,6 +79,8 @@ def run(args: argparse.Namespace) -> int:
         return _error(f"--profile {args.profile}: {exc.strerror or exc}", 2)
     except ValueError as exc:
         return _error(str(exc), 2)
+    if args.node_id is None:
+        args.node_id = model.default_node_id
     drive = make_drive(model, args.node_id, profile=profile, timings=DriveTimings.fast() if args.fast else None)
     if signal_ is not None:
         drive.mc.encoder.drive_with(signal_, 0)

@@ -12,10 +12,11 @@ the benches, vcan) then offers it.
 
 from __future__ import annotations
 
+from .linmot.b1100 import B1100
 from .linmot.drive import E1100Drive
 from .linmot.model import E1100, DriveModel
 
-MODELS: dict[str, DriveModel] = {m.name: m for m in (E1100,)}
+MODELS: dict[str, DriveModel] = {m.name: m for m in (E1100, B1100)}
 
 
 def model_named(name: str) -> DriveModel:
@@ -31,4 +32,4 @@ def make_drive(model: str | DriveModel = "E1100", node_id: int = 1, **options) -
     drive's (profile, timings, protocol, curve_capacity_bytes, error_log, motion: linmot/drive.py)."""
     if isinstance(model, str):
         model = model_named(model)
-    return E1100Drive(node_id, model=model, **options)
+    return (model.drive_class or E1100Drive)(node_id, model=model, **options)

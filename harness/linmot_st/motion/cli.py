@@ -61,10 +61,6 @@ def run_command(args: argparse.Namespace) -> int:
     from .report import MotionProgress, MotionReport
 
     err = sys.stderr
-    if args.pvl:
-        from ..cliargs import UsageError
-        raise UsageError("--pvl: the motion job moves every axis with one dataset's curves; per-node datasets "
-                         "are for `linmot-st commission`")
     prep = prepare_run(args, timings=args.drive_timings or "fast")
     if isinstance(prep, int):
         return prep
@@ -74,7 +70,9 @@ def run_command(args: argparse.Namespace) -> int:
     except BudgetRefused as e:
         print(f"linmot-st motion: refused: {e}", file=err)
         return 1
-    plan = make_plan(prep.pvl, args.position)
+    # per-node PVL files (--pvl NODE=FILE, e.g. a B1100 beside E1100s): the steps every axis can run
+    others = [s.pvl for s in prep.datasets.sources if s.pvl is not prep.pvl] if prep.datasets else []
+    plan = make_plan(prep.pvl, args.position, others=others)
     if plan.refusals:
         # before any motion (and before commissioning): the file's own settings exclude a step
         print(f"motion job: REFUSED before motion: {plan.stroke.describe()}")
@@ -88,7 +86,8 @@ def run_command(args: argparse.Namespace) -> int:
               f"{len(plan.steps)} steps", file=err)
     progress = None if args.quiet else Progress(err)
     try:
-        result = run_job(prep.pvl, prep.opts, prep.build, plan, dataset=prep.dataset, progress=progress,
+        result = run_job(prep.pvl, prep.opts, prep.build, plan, dataset=prep.dataset, datasets=prep.datasets,
+                         progress=progress,
                          motion_progress=None if args.quiet else MotionProgress(err),
                          timeout_s=args.timeout or 120.0, inhibit_100us=budget.interval_100us)
     except (ValueError, OSError) as e:

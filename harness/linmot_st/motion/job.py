@@ -175,12 +175,13 @@ def motion_phase(plan: Plan, timeout_s: float, progress=None, inhibit_100us: int
     return after
 
 
-def placed_drives(stroke, opts: RunOptions):
-    """A drive factory: the runner's emulated drive with the mechanics `stroke` places."""
+def placed_drives(stroke, opts: RunOptions, datasets=None):
+    """A drive factory: the runner's emulated drive (of the series of its node's file, `datasets`) with the
+    mechanics `stroke` places."""
     from linmot_st.commission.runner import emulated_drive
 
     def factory(node: int):
-        drive = emulated_drive(node, opts, motion=stroke.settings())
+        drive = emulated_drive(node, opts, datasets, motion=stroke.settings())
         stroke.store_home(drive)
         return drive
     return factory
@@ -194,6 +195,6 @@ def run_job(pvl, opts: RunOptions, build_result, plan: Plan, *, dataset=None, pr
     if plan.refusals:
         raise ValueError("the motion plan does not fit the axis: " + "; ".join(plan.refusals))
     if plan.stroke is not None and kw.get("drive_factory") is None:
-        kw["drive_factory"] = placed_drives(plan.stroke, opts)
+        kw["drive_factory"] = placed_drives(plan.stroke, opts, kw.get("datasets"))
     return run(pvl, opts, build_result, dataset=dataset, progress=progress,
                after=motion_phase(plan, timeout_s, motion_progress, inhibit_100us), **kw)

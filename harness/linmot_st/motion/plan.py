@@ -110,8 +110,15 @@ def _ct_chain(pvl, entry: int, scale_pos: int) -> tuple[list[int], list[int] | N
     return chain, targets or None
 
 
-def plan(pvl, position_mm: float = 50.0, settings=None) -> Plan:
-    """The steps; `settings`: the emulated drives' MotionSettings whose stroke the plan is fitted into."""
+def _same_curve(a, b) -> bool:
+    return a.info_block == b.info_block and list(a.setpoints) == list(b.setpoints)
+
+
+def plan(pvl, position_mm: float = 50.0, settings=None, others=()) -> Plan:
+    """The steps; `settings`: the emulated drives' MotionSettings whose stroke the plan is fitted into.
+    `others`: the PVL files of other nodes on the bus (per-node datasets; every axis runs the same steps): a
+    curve or command-table step only where each of them holds the same curve or command table (a B1100 file
+    holds neither)."""
     steps = [Step("setup", "set up the PDOs (TxPDO1 event timer 50 ms)"), Step("power", "power (MC_Power)"),
              Step("home", "home (MC_Home)")]
     not_run: list[str] = []
@@ -123,6 +130,11 @@ def plan(pvl, position_mm: float = 50.0, settings=None) -> Plan:
     amplitude = _param(pvl, P_CURVE_AMPLITUDE, 1000) / 1000.0
     for c in pvl.curves:
         info = c.info
+        lacking = [o for o in others if not any(oc.curve_id == c.curve_id and _same_curve(oc, c) for oc in o.curves)]
+        if lacking:
+            not_run.append(f"curve {c.curve_id} {info.name}: not on every axis (per-node PVL files: "
+                           f"{', '.join(o.filename or 'PVL' for o in lacking)})")
+            continue
         if info.object_type != 0x0003:
             not_run.append(f"curve {c.curve_id} {info.name}: object type {info.object_type:04X}h (a cam profile) "
                            "follows a master encoder: the job has no cam step (plc_project drives no encoder cam)")
@@ -137,7 +149,11 @@ def plan(pvl, position_mm: float = 50.0, settings=None) -> Plan:
         steps.append(Step("curve", f"run curve {c.curve_id} {info.name} (040xh)", curve_id=c.curve_id,
                           target_mm=end, curve=run, span_mm=(min(ends) / MM, max(ends) / MM)))
     scale_pos = _param(pvl, P_SCALE_POS, 1000)
-    for e in sorted(pvl.command_table, key=lambda e: e.entry_id):
+    table = {e.entry_id: e.data for e in pvl.command_table}
+    if pvl.command_table and any({e.entry_id: e.data for e in o.command_table} != table for o in others):
+        not_run.append("command table: not the same on every axis (per-node PVL files)")
+        table = {}
+    for e in sorted(pvl.command_table if table else (), key=lambda e: e.entry_id):
         chain, targets = _ct_chain(pvl, e.entry_id, scale_pos)
         if targets is not None:
             steps.append(Step("ct", f"start command-table entry {e.entry_id} {e.block.name} "
@@ -146,7 +162,7 @@ def plan(pvl, position_mm: float = 50.0, settings=None) -> Plan:
                               span_mm=(min(targets) / MM, max(targets) / MM)))
             break
     else:
-        if pvl.command_table:
+        if table:
             not_run.append("command table: no entry whose sequence is absolute VAI moves and waits only")
     steps += [Step("stop", "stop (MC_Stop)", acceleration=STOP_DECELERATION), Step("off", "switch off")]
     if len(steps) > MAX_STEPS:

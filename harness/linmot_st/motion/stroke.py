@@ -62,8 +62,9 @@ class Stroke:
     def store_home(self, drive) -> None:
         """The drive's stored Home Position as placed (before it is switched on; commissioning keeps it, the
         PVL not setting 13C7h)."""
-        if self.home_position_raw is not None:
-            drive.params.write(P_HOME_POSITION, self.home_position_raw & 0xFFFFFFFF, ram=True, rom=True)
+        params = drive.mc.params            # the E1100 UPIDs (a B1100's: the view of its counterparts)
+        if self.home_position_raw is not None and P_HOME_POSITION in params:
+            params.write(P_HOME_POSITION, self.home_position_raw & 0xFFFFFFFF, ram=True, rom=True)
 
 
 def _value(pvl, defaults, upid: int) -> tuple[int, bool]:

@@ -142,10 +142,17 @@ def frame_predicate(can_id: int | list[int] | tuple | set | None = None,
     return lambda f: (ids is None or f.can_id in ids) and (match is None or bool(match(f)))
 
 
+def model_of(model: Any, node: int) -> Any:
+    """The drive model of `node`: `model` itself, or from a dict {node ID: model} (a mixed bus; E1100 where
+    a node is not named)."""
+    return model.get(node, "E1100") if isinstance(model, dict) else model
+
+
 class Rig:
     """The PLC of `build` on a SimBus with emulated drives (node IDs `nodes`), stepped in virtual time.
 
-    model (the drives' model: a name of emulator/models.py's MODELS or a DriveModel; default the E1100),
+    model (the drives' model: a name of emulator/models.py's MODELS or a DriveModel, or a dict {node ID:
+    model} for a mixed bus; default the E1100),
     bitrate, timings ('real', 'fast' or DriveTimings), protocol (ProtocolOptions), profile (DriveProfile),
     latency_ns (added to the drives' frames), drive_factory(node_id) -> node (replaces all of those),
     power_on (switch the drives on at t = 0), mailbox (the PLC's T_CanMailbox; None or absent: no bus
@@ -169,7 +176,7 @@ class Rig:
         self.drives: dict[int, Any] = {}
         for n in nodes:
             drive = drive_factory(n) if drive_factory else make_drive(
-                model, n, profile=profile, timings=_timings(timings), protocol=protocol)
+                model_of(model, n), n, profile=profile, timings=_timings(timings), protocol=protocol)
             self.bus.attach(drive, self.drive_name(n), latency_ns)
             if power_on:
                 drive.power_on(0)
@@ -448,7 +455,7 @@ class RealTimeRig(Rig):
                     drive_bus = open_bus(bus, bitrate=bitrate)
                     self._buses.append(drive_bus)
                     drive = drive_factory(n) if drive_factory else make_drive(
-                        model, n, profile=profile, timings=_timings(timings), protocol=protocol)
+                        model_of(model, n), n, profile=profile, timings=_timings(timings), protocol=protocol)
                     drive.attach(drive_bus)
                     self.drives[n] = drive
         except BaseException:

@@ -27,6 +27,7 @@ ERROR_QUICK_STOP = 14
 GOING_TO_POSITION = 15
 JOGGING_PLUS = 16
 JOGGING_MINUS = 17
+SPECIAL_MODE = 20                 # B1100 only (seed 004 3.20): current command from the analog input
 
 STATE_NAMES = {
     0: "Not Ready To Switch On", 1: "Switch On Disabled", 2: "Ready To Switch On", 3: "Setup Error", 4: "Error",

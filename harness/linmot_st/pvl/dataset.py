@@ -55,6 +55,7 @@ class Dataset:
     curves: list[tuple[int, bytes, list[int]]] = field(default_factory=list)  # (ID, 70-byte info, setpoints)
     entries: list[tuple[int, bytes]] = field(default_factory=list)          # (entry ID, 64-byte block)
     words: int = 0
+    drive: str = "E1100"          # the series the PVL file is for (not in the stream: the PLC's Drive setting)
 
 
 def _u32(v: int) -> int:
@@ -161,15 +162,24 @@ def decode(words: list[int]) -> Dataset:
 
 def from_pvl(pvl) -> Dataset:
     """What the stream of `pvl` holds (encode, then decode: the same checks)."""
-    return decode(encode(pvl))
+    ds = decode(encode(pvl))
+    ds.drive = pvl.drive_type.name
+    return ds
 
 
 PREFLIGHT_EXCHANGES = 4    # per parameter row: UPID list start (20h) and next (21h), min (03h), max (04h)
 
 
-def expected_exchanges(ds: Dataset, *, verify: bool = True, flash: bool = True, preflight: bool = True) -> int:
+def expected_exchanges(ds: Dataset, *, verify: bool = True, flash: bool = True, preflight: bool = True,
+                       live_ram: bool = False) -> int:
     """SDO exchanges of a commissioning run that succeeds (flash polls, the reset request, the NMT check after
     it and the ROM-only retries of non-live parameters under LiveRam not counted: they depend on the drive)."""
+    if ds.drive == "B1100":
+        # every parameter access is a selection (2000h sub C0h) and the access; no pre-flight (the B1100 has
+        # no UPID list and no min/max), no curves or command table
+        # with live_ram a parameter takes one exchange more: RAM (01h), then ROM (02h) of the same selection
+        return (2 * (3 * len(ds.layers) + len(ds.params) + (len(ds.params) if verify else 0))
+                + (len(ds.params) if live_ram else 0))
     n = 3 * len(ds.layers) + len(ds.params)
     if preflight:
         n += PREFLIGHT_EXCHANGES * len(ds.params)

@@ -145,6 +145,7 @@ B1100_USER_COMMENT_UPID = 0x7078      # seed 000 2.5: stringlets 7078h, 7079h, .
 B1100_MC_PARAMETERS = [
     (0x6198, 0x0000000C, r"Motion Control SW\Position Controller\Control Parameter Set A\P Gain", "0.12 A/mm"),
     (0x6300, 0x00000002, r"Motion Control SW\State Machine Setup\Ready To Operate Mode", "Position Controlled"),
+    (0xD194, 0x00000002, r"Motion Control SW\Motor Configuration\Motor Type", "P01"),
     (0xD46E, 0xFFFE7960, r"Motion Control SW\Position Limits\Negative Limit", "-10 mm"),
     (0xD46F, 0x001E8480, r"Motion Control SW\Position Limits\Positive Limit", "200 mm"),
     (0xD472, 0x00004E20, r"Motion Control SW\Position Controller\Position Lag Always Warn Level", "2 mm"),

@@ -57,8 +57,10 @@ class EmulatedDrives:
     node, each in its own process; entering waits until every drive has sent its boot-up message, leaving
     stops them with SIGTERM (their exit status and logs are kept, the memory dumps read)."""
 
-    def __init__(self, node_ids, work: Path, *, channel: str = "vcan0", extra_args: tuple = ()) -> None:
+    def __init__(self, node_ids, work: Path, *, channel: str = "vcan0", extra_args: tuple = (),
+                 model: str = "E1100") -> None:
         self.node_ids = list(node_ids)
+        self.model = model                 # `emulate --drive MODEL` (emulator/models.py)
         self.work = Path(work)
         self.channel = channel
         self.extra_args = tuple(extra_args)
@@ -84,7 +86,8 @@ class EmulatedDrives:
                     self.procs[n] = subprocess.Popen(
                         [sys.executable, "-m", "linmot_st.cli", "emulate", "--interface", "socketcan",
                          "--channel", self.channel, "--node-id", str(n), "--fast",
-                         "--dump-memory", str(self.work / f"drive{n}.json"), *self.extra_args],
+                         "--dump-memory", str(self.work / f"drive{n}.json"), "--drive", self.model,
+                         *self.extra_args],
                         stdout=log, stderr=subprocess.STDOUT, cwd=REPO, env=dict(os.environ, PYTHONUNBUFFERED="1"))
             waiting, deadline = set(self.node_ids), time.monotonic() + BOOT_TIMEOUT_S
             while waiting and time.monotonic() < deadline:
@@ -116,10 +119,10 @@ class EmulatedDrives:
         return self._memory[node]
 
     def drive(self, node: int):
-        """An E1100 drive (the default profile, as `linmot-st emulate` serves it) holding the node's memory."""
+        """A drive of the model (its default profile, as `linmot-st emulate` serves it) holding the node's memory."""
         from linmot_st.emulator.linmot.memory import load
         from linmot_st.emulator.models import make_drive
-        drive = make_drive("E1100", node)
+        drive = make_drive(self.model, node)
         load(drive, self.memory(node))
         return drive
 

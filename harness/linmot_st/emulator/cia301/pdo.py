@@ -87,7 +87,7 @@ class ProcessData:
     def start(self, t: int) -> None:
         """The node enters Operational: read the communication and mapping parameters, publish."""
         d = self.drive
-        comm, params = d.comm, d.params
+        comm, params = d.comm, d.mc.params
         self.rx1_mode = params[P_RX1_MODE].ram if P_RX1_MODE in params else 0
         self.rx3_mode = params[P_RX3_MODE].ram if P_RX3_MODE in params else 0
         sync_rx = bool(params[P_RX_ON_SYNC].ram) if P_RX_ON_SYNC in params else False
@@ -128,7 +128,7 @@ class ProcessData:
 
     def _mapping(self, n: int, t: int) -> tuple[Callable[[], bytes] | None, bool]:
         """The packer of TxPDO n, and whether its content can change in a quiet MC cycle (positions...)."""
-        params = self.drive.params
+        params = self.drive.mc.params
         mode_upid = P_TX_MODE[n]
         by_upid = mode_upid is None or (mode_upid in params and params[mode_upid].ram == 1)
         if not by_upid:
@@ -165,7 +165,7 @@ class ProcessData:
         return None                     # TxPDO3: empty unless mapped by UPID
 
     def _upid_item(self, upid: int) -> tuple[str, Callable[[], int]]:
-        p = self.drive.params[upid]
+        p = self.drive.mc.params[upid]
         mc = self.drive.mc
         bits, signed = p.d.type.bits, p.d.type.signed
         code = ("i" if signed else "I") if bits > 16 else ("h" if signed else "H")
@@ -237,7 +237,7 @@ class ProcessData:
 
     def _direct_pars(self, data: bytes) -> None:
         """RxPDO3 as Direct Par 1 / 2: 16-bit values for the live parameters named by 2050h / 2051h."""
-        params = self.drive.params
+        params = self.drive.mc.params
         for k, upid_par in enumerate(P_DIRECT_PAR_UPIDS):
             upid = params[upid_par].ram if upid_par in params else 0
             if upid and upid in params:

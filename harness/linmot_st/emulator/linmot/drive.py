@@ -112,9 +112,9 @@ class E1100Drive(NmtSlave):
         self.flash_cycles = {"curves": 0, "ct": 0}
         self.errlog = error_log or ErrorLog()
         self.motion = motion or MotionSettings()
-        self.mc = MotionControl(self.motion, self.timings.hw_test_ns, self.params, self.curves, self.ct,
-                                self._log_error)
-        self.mc.series = model.name        # the catalogue rows' `drives` say which commands it has
+        self.mc = MotionControl(self.motion, self.timings.hw_test_ns, self.motion_params(self.params), self.curves,
+                                self.ct, self._log_error)
+        self.mc.drive_type = model.name    # the catalogue rows' `drives` say which commands it has
         self.params.live = self.mc.variable
         self.mc.on_reset = lambda t: self._at(t, self._start_boot)     # 00Fxh: the whole firmware restarts
         self.io = DriveIO(io, par=self.mc.par)
@@ -350,10 +350,15 @@ class E1100Drive(NmtSlave):
 
     def _heartbeat_power_on_ms(self) -> int:
         """1017h at power-on: the interface parameters "Produce Heartbeat" / "Producer Time" (RAM)."""
-        p = self.params
+        p = self.mc.params
         if PRODUCE_HEARTBEAT_UPID in p and PRODUCER_TIME_UPID in p and p[PRODUCE_HEARTBEAT_UPID].ram:
             return p[PRODUCER_TIME_UPID].ram
         return 0
+
+    def motion_params(self, store):
+        """The parameters as the motion control and the PDOs name them (E1100 UPIDs): the store itself here; a
+        model with other UPIDs gives a view keyed by their E1100 counterparts (b1100.py)."""
+        return store
 
     def _error_register(self) -> int:
         return 0x01 if self.mc.running and self.mc.state in (SETUP_ERROR, ERROR) else 0x00
@@ -414,7 +419,8 @@ class E1100Drive(NmtSlave):
         return Reply(delay_ns=self.timings.mc_start_ns, then=started)
 
     def _mc_start_now(self, t: int) -> None:
-        motor = self.params[MOTOR_TYPE_UPID].ram if MOTOR_TYPE_UPID in self.params else 1
+        p = self.mc.params
+        motor = p[MOTOR_TYPE_UPID].ram if MOTOR_TYPE_UPID in p else 1
         error = self.mc.start(t, motor_defined=motor != 0)
         self.mc_phase = "running"
         if error is not None:

@@ -30,6 +30,8 @@ class DriveModel:
     services: tuple[Service, ...]              # the manufacturer services 2000h..5FFFh, by sub-index
     quirks: tuple[Quirk, ...] = ()
     description: str = ""
+    drive_class: type | None = None            # the node class when the model needs more than data and quirks
+    default_node_id: int = 1                   # where the harness lets the drive choose (`emulate --drive`)
 
     def load_profile(self) -> DriveProfile:
         return load_profile(self.profile)

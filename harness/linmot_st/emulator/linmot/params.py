@@ -61,6 +61,8 @@ class Parameter:
 
 
 class ParameterStore:
+    stringlet_offset = 1                        # stringlet k at string UPID + k - 1 + offset (B1100: 0)
+
     def __init__(self, definitions: list[ParamDef]):
         self._p: dict[int, Parameter] = {d.upid: Parameter(d, d.default, d.default) for d in definitions}
         self.by_upid = self._p                  # read-only view for the MC's per-cycle parameter reads
@@ -159,14 +161,20 @@ class ParameterStore:
             p.ram = p.d.type.from_raw(value)
 
     # ---- strings (inspection and test setup) ----
+    def use_strings(self, headers: list[ParamDef], stringlet_offset: int) -> None:
+        """A drive whose string UPID is its first stringlet (B1100) has no header rows: give them here."""
+        self._strings = {d.upid: d for d in headers}
+        self.stringlet_offset = stringlet_offset
+
     def string(self, upid: int, which: str = "rom") -> str:
         d = self._strings[upid]
-        return text_of([getattr(self._p[upid + k], which) for k in range(1, d.stringlets + 1)])
+        o = self.stringlet_offset - 1
+        return text_of([getattr(self._p[upid + k + o], which) for k in range(1, d.stringlets + 1)])
 
     def set_string(self, upid: int, text: str, which: str = "both") -> None:
         d = self._strings[upid]
         for k, v in enumerate(stringlets_of(text, d.stringlets), start=1):
-            p = self._p[upid + k]
+            p = self._p[upid + k - 1 + self.stringlet_offset]
             if which in ("rom", "both"):
                 p.rom = v
             if which in ("ram", "both"):

@@ -23,7 +23,6 @@ from ...protocol.upids import (
     P_CAM_MODE, P_CAM_MODULO_LENGTH, P_CURVE_AMPLITUDE, P_CURVE_OFFSET, P_QUICK_STOP_DEC, P_TRIG_CAM_CURVE_FALL,
     P_TRIG_CAM_CURVE_RISE, P_TRIG_CAM_DELAY_FALL, P_TRIG_CAM_DELAY_RISE,
 )
-from .drive_series import on_series
 from .setpoints import StopPlan, _demands_by_at
 from .units import ACC_RAW
 
@@ -255,4 +254,4 @@ def _start_triggered(mc, f: dict, t_edge: int, t: int) -> bool:
     return True
 
 
-HANDLERS = {C.Kind.ENCODER_CAM: on_series(_cam_command), C.Kind.TRIGGERED_CAM: on_series(_triggered_cam)}
+HANDLERS = {C.Kind.ENCODER_CAM: _cam_command, C.Kind.TRIGGERED_CAM: _triggered_cam}

@@ -17,7 +17,6 @@ import random
 
 from ...protocol import commands as C
 from ...protocol.commands import CommandDef
-from .drive_series import on_series
 from .setpoints import VaPlan
 from .stepwise import StepwisePlan
 from .units import ACC_RAW, VEL_RAW
@@ -110,4 +109,4 @@ def force_variable(mc) -> int:
     return int(round(sensor_of(mc).last_n * 10))
 
 
-HANDLERS = {C.Kind.FORCE_CONTROL: on_series(_force_control)}
+HANDLERS = {C.Kind.FORCE_CONTROL: _force_control}

@@ -31,11 +31,13 @@ Handler = Callable[["Interpreter", CommandDef, dict, int], bool]     # (mc, row,
 class Interpreter:
     """execute() and the helpers the handlers share (a mixin of MotionControl)."""
 
+    drive_type = C.E1100        # the drive series: a command whose row lacks it answers 0081h (B1100: b1100.py)
+
     def execute(self, header: int, params: bytes, t: int, from_table: bool = False) -> bool:
         """Run one motion command at t; False when it raised an error."""
         c, f = C.decode(header, params)
         self.executed.append((t, header, bytes(params[:16])))
-        handler = HANDLERS.get(c.kind) if c is not None else None
+        handler = HANDLERS.get(c.kind) if c is not None and self.drive_type in c.drives else None
         if handler is None:
             return self._fail(W.ERR_UNKNOWN_MOTION_CMD, t)
         if c.needs_homing and self.s.motion_requires_homing and not self.homed:
@@ -58,7 +60,7 @@ class Interpreter:
 
     def _write_live(self, upid: int, raw: int) -> None:
         """002xh: the RAM value of a live parameter, masked to its width (INFERRED: anything else is ignored)."""
-        p = self.params
+        p = getattr(self.params, "store", self.params)     # the drive's own UPIDs (a B1100's: E1100View.store)
         if upid in p:
             d = p[upid].d
             if d.kind == "par" and d.live and d.access == "rw":

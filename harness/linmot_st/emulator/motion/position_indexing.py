@@ -9,7 +9,6 @@ from __future__ import annotations
 
 from ...protocol import commands as C
 from ...protocol.commands import CommandDef
-from .drive_series import on_series
 from .stepwise import StepwisePlan, track
 from .units import ACC_RAW, VEL_RAW
 
@@ -48,4 +47,4 @@ def _position_indexing(mc, c: CommandDef, f: dict, t: int) -> bool:
     return True
 
 
-HANDLERS = {C.Kind.POSITION_INDEXING: on_series(_position_indexing)}
+HANDLERS = {C.Kind.POSITION_INDEXING: _position_indexing}

@@ -22,6 +22,8 @@ HOMING_SEARCH = {2: +1, 3: -1, 4: +1, 5: -1}       # mech stop / home switch, po
 class StateMachine:
     """The main states and their transitions (a mixin of MotionControl: it reads and sets its state)."""
 
+    special_mode = False        # state 20 on control word bit 10 (the B1100's; b1100.py sets it)
+
     def _evaluate(self, t: int, old_cw: int) -> None:
         cw = self.control_word
         rising = cw & ~old_cw
@@ -99,6 +101,9 @@ class StateMachine:
                 if not cw & _SPECIAL_BIT[s]:
                     self._leave_special(t)
                 return
+            if s == W.SPECIAL_MODE and not cw & W.CW_SPECIAL_MODE:
+                self._take_control(t)
+                self.state = W.OPERATION_ENABLED
             return
 
     def _state8(self, t: int, cw: int, rising: int) -> None:
@@ -113,6 +118,14 @@ class StateMachine:
             self.ct_runner.stop()
             self._quick_stop(t, None)
             self.state = W.FREEZING
+            return
+        if cw & W.CW_SPECIAL_MODE and self.special_mode:
+            # B1100 (seed 004 3.20, 3.22): current from the analog input, which the emulation has not: current 0,
+            # the position uncontrolled (INFERRED, docs/emulator.md 14.3); back to 8 when bit 10 drops
+            self.ct_runner.stop()
+            self.gen = Hold(self.gen.at(t)[0])
+            self.controlled = False
+            self.state, self.sub = W.SPECIAL_MODE, 0
             return
         if cw & (W.CW_SPECIAL_MODE | W.CW_PHASE_SEARCH):
             self._fail(W.ERR_MOTION_CMD_WRONG_STATE, t)      # states 19/20 are not on the E1100 (INFERRED code)

@@ -18,7 +18,6 @@ from ...protocol import commands as C
 from ...protocol import words as W
 from ...protocol.commands import CommandDef
 from ...protocol.upids import P_WINDING_LEFT, P_WINDING_PITCH, P_WINDING_RIGHT
-from .drive_series import on_series
 from .setpoints import _demands_by_at
 
 NEVER = 1 << 62
@@ -133,4 +132,4 @@ def _winding(mc, c: CommandDef, f: dict, t: int) -> bool:
     return True
 
 
-HANDLERS = {C.Kind.WINDING: on_series(_winding)}
+HANDLERS = {C.Kind.WINDING: _winding}
