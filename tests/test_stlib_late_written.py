@@ -89,3 +89,30 @@ def test_after_a_timed_out_write_the_next_write_reads_ram_and_rom_back():
             and e.frame.data[1:3] == bytes([0x05, 0x30])]
     # the first write, its abort, the retry, RAM read back, ROM read back
     assert reqs == [(0x23, 0x06), (0x80, 0x06), (0x23, 0x06), (0x40, 0x01), (0x40, 0x02)]
+
+
+def test_b1100_the_write_after_a_timeout_selects_and_reads_back():
+    """B1100 (every access through 2000h: select C0h, RAM 01h, ROM 02h): after a timed-out RAM write, the
+    next RAM write is select + write + select + read; a value that reads back the same is Done."""
+    sys.path.insert(0, str(Path(__file__).parent))
+    from test_stlib_channel import FakeB1100
+
+    b = Bench(nodes=0, enable=False)
+    fake = FakeB1100(63)
+    b.bus.attach(fake, "b1100")
+    b.bus.call_at(0, lambda t: b.bus._queue_all(b.bus._parts_by_name["b1100"], t, fake.power_on(t)))
+    b["CH1.NODEID"] = 63
+    b["CH1.DRIVE"] = "LM_B1100"
+    b["CH1.ENABLE"] = True
+    b.sim.run_until(lambda: b["AX1.BOOTCOUNT"] >= 1, max_scans=100)
+    b.bus.drop(lambda f: f.can_id == 0x5BF and f.data[0] == 0x60 and f.data[3] == 0x01, count=1)
+    wr = b.fb("WR")
+    assert wr.run(UPID=0xE9E7, VALUE=-100, MEM="LM_RAM", max_scans=5000).error_id == E["SdoTimeout"]
+    before = len(fake.requests)
+    r = wr.run(UPID=0xE9E7, VALUE=-200, MEM="LM_RAM", max_scans=5000)
+    assert r.done and fake.ram[0xE9E7] == -200 & 0xFFFFFFFF
+    sent = [(d[0], d[3]) for d in fake.requests[before:]]
+    assert sent == [(0x23, 0xC0), (0x23, 0x01), (0x23, 0xC0), (0x40, 0x01)]     # select, write; select, read
+    before = len(fake.requests)
+    assert wr.run(UPID=0xE9E7, VALUE=-300, MEM="LM_RAM", max_scans=5000).done
+    assert len(fake.requests) - before == 2                 # confirmed once: select + write again
