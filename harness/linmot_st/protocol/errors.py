@@ -89,6 +89,7 @@ ERRORS: tuple[ErrorDef, ...] = (
     ErrorDef("UploadInconsistent", 0x0309, "uploaded curve: the info block's setpoints x 4 differ from the data size"),
     ErrorDef("ListFull", 0x030A, "UPID list longer than T_LmUpidList holds (the list holds the first 2048)"),
     ErrorDef("NotOperational", 0x030B, "after its boot-up the drive did not report NMT Operational within BootTimeout (FailActual = the last NMT state it reported, 00h none)"),
+    ErrorDef("WriteNotConfirmed", 0x030C, "a write to an object whose earlier exchange timed out was answered 'written' but reads back another value: the answer may have been the late one of that exchange (CiA 301 has no transaction number); the drive holds what was read"),
     # 04xx E1100 result codes (16#0400 + rr)
     ErrorDef("ResultBase", RESULT_BASE, "E1100 result code rr: ErrorID = 16#0400 + rr (the named ones follow)"),
     ErrorDef("ResultNotFinished", RESULT_BASE + 0x04, "result 04h: block not finished where the end was expected / flash busy"),
