@@ -55,6 +55,12 @@ SPECS = [
     Spec("CURVE", dict(CURVEID=1), dict(CURVEID=2), dict(CURVEID=101), setup=curves_and_table),
     Spec("CT", dict(ENTRY=5), dict(ENTRY=6), dict(ENTRY=300), setup=curves_and_table),
     Spec("LIVE", dict(UPID=0x13A2, VALUE=20), dict(VALUE=30), dict(UPID=0x5000)),
+    # issue 22
+    Spec("MVADD", dict(DISTANCE=2.0, **MOVE), dict(DISTANCE=7.0), dict(DECELERATION=0.0)),
+    Spec("SETPOS", dict(POSITION=12.5), dict(POSITION=20.0), dict(POSITION=1.0e6)),
+    Spec("CMD", dict(CID=0x090, A=40, B=1000, C=100, D=100), dict(A=90), dict(CID=0x123)),
+    Spec("WPAR", dict(UPID=0x14B0, VALUE=20000), dict(VALUE=30000), dict(UPID=0x5000), frames=(0x601,),
+         abortable=False),
 ]
 IDS = [s.name for s in SPECS]
 
@@ -109,7 +115,7 @@ def test_retrigger_while_busy_is_ignored_and_inputs_are_latched(spec):
     reference = rx_frames(ref, t0, spec.frames)
 
     b = bench(spec)
-    b.bus.delay(lambda f: f.can_id == 0x181, 3 * MS)            # the drive's echo comes late: Busy longer
+    b.bus.delay(lambda f: f.can_id in (0x181, 0x581), 3 * MS)   # the drive's echo (SDO reply) comes late
     fb = b.fb(spec.name)
     fb.set(**spec.inputs)
     t0 = b.plc.time_ns
@@ -127,7 +133,7 @@ def test_invalid_input_error_held_then_reset(spec):
     t0 = b.plc.time_ns
     states = run_recording(b, fb, execute_scans=None)
     assert states[0][2] and states[0][4] != 0 and all(s[2] for s in states)
-    assert rx_frames(b, t0, (0x301, 0x401)) == []
+    assert rx_frames(b, t0, (0x301, 0x401) + spec.frames) == []
     check_reset_on_falling_edge(b, fb)
 
 

@@ -1,0 +1,249 @@
+"""The PLCopen FBs of issue 22 against the moving emulated E1100 (tests/st_lib/motion_testbench.st): MC_MoveAdditive
+(increment the target position), MC_Jog (control-word jog bits, states 16/17), MC_SetPosition (master homing),
+FB_LmMotionCommand (any catalogue command, raw), MC_ReadParameter / MC_WriteParameter and MC_ReadActualVelocity
+(parameter services), each checked on the drive's trajectory record or its parameters, and their refusals
+before any frame."""
+
+from __future__ import annotations
+
+import struct
+import sys
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
+from motionbench import MM, MotionBench  # noqa: E402
+
+from linmot_st.protocol.errors import BY_NAME  # noqa: E402
+
+E = {name: e.value for name, e in BY_NAME.items()}
+MS = 1_000_000
+MOVE = dict(VELOCITY=1000.0, ACCELERATION=10000.0, DECELERATION=10000.0)    # 1 m/s, 10 m/s^2
+
+
+def bench() -> MotionBench:
+    return MotionBench(nodes=1).ready()
+
+
+def heads(b: MotionBench, t0: int) -> list[int]:
+    return [struct.unpack_from("<H", f)[0] >> 4 for f in b.payloads(0x301, t0)]
+
+
+def no_motion_frames(b: MotionBench, t0: int) -> bool:
+    return b.payloads(0x301, t0) == [] and b.payloads(0x401, t0) == []
+
+
+# ---------------------------------------------------------------- MC_MoveAdditive
+def test_move_additive_adds_to_the_target_of_the_interrupted_move():
+    """MC_MoveAdditive during a move to 60 mm by +10 mm ends at 70 mm (092xh: the last target plus the
+    distance); MC_MoveRelative would add to the demand position at that moment."""
+    b = bench()
+    t0 = b.plc.time_ns
+    b.fb("MVA").start(POSITION=60.0, VELOCITY=200.0, ACCELERATION=10000.0, DECELERATION=10000.0)
+    b.step(30)
+    assert b["MVA.ACTIVE"]
+    mid = b.drive.mc.dem_p
+    r = b.fb("MVADD").run(DISTANCE=10.0, VELOCITY=200.0, ACCELERATION=10000.0, DECELERATION=10000.0)
+    assert r.done, r
+    assert b["MVA.COMMANDABORTED"]
+    assert abs(b.drive.mc.axis.position - 70 * MM) <= 1000 and abs(b["RP.POSITION"] - 70.0) <= 0.1
+    assert mid + 10 * MM < 60 * MM                   # a relative move would have ended short of 60 mm
+    assert heads(b, t0) == [0x090, 0x092]
+
+
+def test_move_additive_with_32_bit_values_goes_as_predefined_vai():
+    b = bench()
+    start = b.drive.mc.dem_p
+    t0 = b.plc.time_ns
+    r = b.fb("MVADD").run(DISTANCE=12.3456, VELOCITY=333.3, ACCELERATION=7777.0, DECELERATION=6666.0)
+    assert r.done, r
+    assert heads(b, t0) == [0x002, 0x002, 0x002, 0x022]
+    assert abs(b.drive.mc.dem_p - (start + 123456)) < 1
+
+
+def test_move_additive_invalid_input_before_any_frame():
+    b = bench()
+    t0 = b.plc.time_ns
+    r = b.fb("MVADD").run(DISTANCE=5.0, VELOCITY=-1.0, ACCELERATION=1.0, DECELERATION=1.0, max_scans=5)
+    assert r.error and r.error_id == E["InvalidVelocity"] and no_motion_frames(b, t0)
+
+
+# ---------------------------------------------------------------- MC_Jog
+def jog(b: MotionBench, **inputs) -> None:
+    base = dict(VELOCITY=100.0, ACCELERATION=1000.0, DECELERATION=1000.0, INCREMENT=0.0,
+                JOGFORWARD=False, JOGBACKWARD=False)
+    for k, v in {**base, **inputs}.items():
+        b[f"JOG.{k}"] = v
+
+
+def test_jog_forward_while_held_then_stops_when_released():
+    b = bench()
+    start = b.drive.mc.axis.position
+    t0 = b.plc.time_ns
+    jog(b, JOGFORWARD=True)
+    b.sim.run_until(lambda: b["JOG.ACTIVE"], max_scans=200)
+    assert b["JOG.BUSY"] and b["RSTAT.STATEVAR"] >> 8 == 16
+    b.step(300)                                       # 0.3 s held
+    assert b.drive.mc.params[0x14B0].ram == 100_000                   # 100 mm/s written first
+    samples = b.drive.mc.trajectory.between(t0)
+    assert max(abs(s.demand_velocity) for s in samples) / MM == pytest.approx(100.0, rel=0.01)
+    jog(b, JOGFORWARD=False)
+    b.sim.run_until(lambda: b["JOG.DONE"] or b["JOG.ERROR"], max_scans=500)
+    assert b["JOG.DONE"] and not b["JOG.BUSY"]
+    moved = (b.drive.mc.axis.position - start) / MM
+    # 0.3 s at 100 mm/s plus the ramps: about 30 mm, the ramps 5 mm each way
+    assert 25.0 < moved < 45.0, moved
+    assert b["RSTAT.STATEVAR"] >> 8 == 8 and b["RSTAT.STANDSTILL"]
+    assert heads(b, t0) == [0x002, 0x002, 0x002, 0x002]
+    assert b.payloads(0x201, t0)[0][1] & 0x01                           # control word bit 8
+
+
+def test_jog_backward_by_an_increment():
+    b = bench()
+    b.fb("MVA").run(POSITION=60.0, **MOVE)
+    jog(b, JOGBACKWARD=True, INCREMENT=5.0)
+    b.sim.run_until(lambda: b["JOG.ACTIVE"], max_scans=200)
+    assert b["RSTAT.STATEVAR"] >> 8 == 17
+    b.step(400)                                       # the increment is done long before: the drive holds
+    assert abs(b.drive.mc.axis.position - 55 * MM) <= 1000
+    jog(b, JOGBACKWARD=False)
+    b.sim.run_until(lambda: b["JOG.DONE"], max_scans=500)
+    assert abs(b["RP.POSITION"] - 55.0) <= 0.1
+
+
+def test_jog_both_directions_or_bad_velocity_refused_before_any_frame():
+    b = bench()
+    t0 = b.plc.time_ns
+    jog(b, JOGFORWARD=True, JOGBACKWARD=True)
+    b.step(3)
+    assert b["JOG.ERROR"] and b["JOG.ERRORID"] == E["JogDirection"]
+    jog(b)
+    b.step(2)
+    assert not b["JOG.ERROR"]
+    jog(b, JOGFORWARD=True, VELOCITY=0.0)
+    b.step(3)
+    assert b["JOG.ERROR"] and b["JOG.ERRORID"] == E["InvalidVelocity"]
+    assert no_motion_frames(b, t0) and all(p[1] & 0x03 == 0 for p in b.payloads(0x201, t0))
+
+
+def test_halt_aborts_a_jog():
+    b = bench()
+    jog(b, JOGFORWARD=True)
+    b.sim.run_until(lambda: b["JOG.ACTIVE"], max_scans=200)
+    b.step(100)
+    r = b.fb("HALT").run(DECELERATION=5000.0)
+    assert r.done, r
+    assert b["JOG.COMMANDABORTED"] and not b["JOG.BUSY"] and b["RSTAT.STATEVAR"] >> 8 == 8
+    v = b.drive.mc.trajectory.samples[-1].demand_velocity
+    assert v == 0
+
+
+# ---------------------------------------------------------------- MC_SetPosition
+def test_set_position_absolute_and_relative():
+    b = bench()
+    at = b.drive.mc.axis.position
+    t0 = b.plc.time_ns
+    r = b.fb("SETPOS").run(POSITION=100.0)
+    assert r.done, r
+    assert heads(b, t0) == [0x009] and b.payloads(0x301, t0)[0][2:6] == struct.pack("<i", 100 * MM)
+    b.step(5)
+    assert abs(b["RP.POSITION"] - 100.0) <= 0.1 and abs(b.drive.mc.axis.position - 100 * MM) <= 10
+    assert b.drive.mc.params[0x13C7].ram == 100 * MM
+    assert abs(b.drive.mc.axis.position - at - (100 * MM - at)) <= 10          # no motion: only the frame moved
+    r = b.fb("SETPOS").run(POSITION=-5.0, RELATIVE=True)
+    assert r.done, r
+    b.step(5)
+    assert abs(b["RP.POSITION"] - 95.0) <= 0.15
+    r = b.fb("MVA").run(POSITION=90.0, **MOVE)                          # the new frame moves
+    assert r.done and abs(b.drive.mc.axis.position - 90 * MM) <= 1000
+
+
+def test_set_position_refusals_before_any_frame():
+    b = MotionBench(nodes=1)
+    t0 = b.plc.time_ns
+    r = b.fb("SETPOS").run(POSITION=1.0, max_scans=5)
+    assert r.error and r.error_id == E["AxisNotEnabled"] and no_motion_frames(b, t0)
+    b.power()
+    r = b.fb("SETPOS").run(POSITION=3e5, max_scans=5)
+    assert r.error and r.error_id == E["PositionRange"] and no_motion_frames(b, t0)
+
+
+# ---------------------------------------------------------------- FB_LmMotionCommand
+def test_raw_command_moves_as_the_catalogue_says():
+    b = bench()
+    t0 = b.plc.time_ns
+    # 090xh: 40 mm (0.1 mm units), 1 m/s, 1 m/s^2 (16-bit interface scaling)
+    r = b.fb("CMD").run(CID=0x090, A=400, B=1000, C=100, D=100, WAITINTARGET=True)
+    assert r.done, r
+    assert heads(b, t0) == [0x090] and b.payloads(0x301, t0)[0][2:] == struct.pack("<hHH", 400, 1000, 100)
+    assert abs(b.drive.mc.axis.position - 40 * MM) <= 1000
+
+
+def test_raw_command_without_follow_is_done_when_taken():
+    b = bench()
+    r = b.fb("CMD").run(CID=0x002, A=0x14B0, B=123_000, FOLLOW=False)
+    assert r.done, r
+    assert b.drive.mc.params[0x14B0].ram == 123_000
+
+
+def test_raw_command_refused_by_the_drive_reports_its_error():
+    b = bench()
+    r = b.fb("CMD").run(CID=0x040, A=77)                      # curve 77 is not in the drive's curve RAM
+    assert r.error and r.error_id == E["DriveError"] and r["DRIVEERROR"] == 0x0062
+
+
+def test_raw_command_unknown_or_not_mapped_refused_before_any_frame():
+    b = bench()
+    t0 = b.plc.time_ns
+    r = b.fb("CMD").run(CID=0x123, max_scans=5)
+    assert r.error and r.error_id == E["UnknownCommand"]
+    r = b.fb("CMD").run(CID=0x1234, max_scans=5)
+    assert r.error and r.error_id == E["UnknownCommand"]
+    r = b.fb("CMD").run(CID=0x010, A=10, B=10, C=10, D=10, max_scans=5)   # 16 bytes: no RxPDO carries them
+    assert r.error and r.error_id == E["CommandNotMapped"]
+    assert no_motion_frames(b, t0)
+
+
+# ---------------------------------------------------------------- parameters and velocity
+def test_write_then_read_parameter():
+    b = MotionBench(nodes=1)
+    r = b.fb("WPAR").run(UPID=0x14B0, VALUE=250_000)
+    assert r.done, r
+    assert b.drive.mc.params[0x14B0].ram == 250_000
+    b["RPAR.UPID"] = 0x14B0
+    b["RPAR.ENABLE"] = True
+    b.sim.run_until(lambda: b["RPAR.VALID"] or b["RPAR.ERROR"], max_scans=200)
+    assert b["RPAR.VALID"] and b["RPAR.VALUE"] == 250_000 and not b["RPAR.BUSY"]
+    n = len(b.sdo_trace())
+    b.step(20)
+    assert len(b.sdo_trace()) == n                              # once per Enable
+    b["RPAR.ENABLE"] = False
+    b.step(1)
+    assert not b["RPAR.VALID"]
+    b["RPAR.UPID"] = 0x5000
+    b["RPAR.ENABLE"] = True
+    b.step(3)
+    assert b["RPAR.ERROR"] and b["RPAR.ERRORID"] == E["InvalidUpid"]
+
+
+def test_read_parameter_cyclic_follows_the_drive():
+    b = MotionBench(nodes=1)
+    b["RPAR.UPID"] = 0x14B0
+    b["RPAR.CYCLIC"] = True
+    b["RPAR.ENABLE"] = True
+    b.sim.run_until(lambda: b["RPAR.VALID"], max_scans=200)
+    b.drive.mc.params[0x14B0].ram = 4242
+    b.sim.run_until(lambda: b["RPAR.VALUE"] == 4242, max_scans=200)
+    assert b["RPAR.BUSY"] and b["RPAR.VALID"]
+
+
+def test_read_actual_velocity_during_a_move():
+    b = bench()
+    b["RV.ENABLE"] = True
+    b.sim.run_until(lambda: b["RV.VALID"], max_scans=200)
+    assert abs(b["RV.VELOCITY"]) < 1.0 and b["RV.DEMANDVELOCITY"] == 0.0
+    b.fb("MVA").start(POSITION=200.0, VELOCITY=300.0, ACCELERATION=10000.0, DECELERATION=10000.0)
+    b.step(200)                                                # cruising at 300 mm/s
+    assert b["RV.DEMANDVELOCITY"] == pytest.approx(300.0, abs=0.01)
+    assert b["RV.VELOCITY"] == pytest.approx(300.0, abs=15.0)
