@@ -15,6 +15,7 @@ import pytest
 sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
 from motionbench import MM, MotionBench  # noqa: E402
 
+from linmot_st.protocol import commands as C  # noqa: E402
 from linmot_st.protocol.errors import BY_NAME  # noqa: E402
 
 E = {name: e.value for name, e in BY_NAME.items()}
@@ -247,3 +248,70 @@ def test_read_actual_velocity_during_a_move():
     b.step(200)                                                # cruising at 300 mm/s
     assert b["RV.DEMANDVELOCITY"] == pytest.approx(300.0, abs=0.01)
     assert b["RV.VELOCITY"] == pytest.approx(300.0, abs=15.0)
+
+
+# ---------------------------------------------------------------- MC_MoveVelocity
+HAS_INFINITE = 0x02E in C.COMMANDS and 0x02F in C.COMMANDS
+needs_infinite = pytest.mark.skipif(not HAS_INFINITE, reason="the catalogue has no 02Exh/02Fxh yet (branch vai20)")
+
+
+def mvv(b: MotionBench, **inputs):
+    f = b.fb("MVV")
+    f.start(**{**dict(VELOCITY=100.0, ACCELERATION=1000.0, DECELERATION=1000.0, DIRECTION="LM_DIR_POSITIVE"),
+               **inputs})
+    return f
+
+
+def test_move_velocity_invalid_inputs_before_any_frame():
+    b = bench()
+    t0 = b.plc.time_ns
+    f = mvv(b, VELOCITY=0.0)
+    b.step(2)
+    assert f["ERROR"] and f["ERRORID"] == E["InvalidVelocity"] and not f["BUSY"]
+    b["MVV.EXECUTE"] = False
+    b.step(2)
+    f = mvv(b, DECELERATION=-5.0)
+    b.step(2)
+    assert f["ERROR"] and f["ERRORID"] == E["InvalidDeceleration"]
+    assert no_motion_frames(b, t0)
+
+
+@pytest.mark.skipif(HAS_INFINITE, reason="the catalogue has 02Exh/02Fxh")
+def test_move_velocity_without_the_infinite_motion_rows_is_refused_before_any_frame():
+    b = bench()
+    t0 = b.plc.time_ns
+    f = mvv(b)
+    b.step(2)
+    assert f["ERROR"] and f["ERRORID"] == E["UnknownCommand"] and no_motion_frames(b, t0)
+
+
+@needs_infinite
+@pytest.mark.parametrize("direction, sign, cid", [("LM_DIR_POSITIVE", 1, 0x02E), ("LM_DIR_NEGATIVE", -1, 0x02F)])
+def test_move_velocity_reaches_the_velocity_and_halt_aborts_it(direction, sign, cid):
+    b = bench()
+    b.fb("MVA").run(POSITION=150.0, **MOVE)
+    t0 = b.plc.time_ns
+    f = mvv(b, VELOCITY=100.0, DIRECTION=direction)
+    b.sim.run_until(lambda: f["INVELOCITY"] or f["ERROR"], max_scans=1000)
+    assert f["INVELOCITY"] and f["BUSY"] and f["ACTIVE"], (f["ERRORID"], f["DRIVEERROR"])
+    assert heads(b, t0) == [0x002, 0x002, 0x002, cid]
+    s = b.drive.mc.trajectory.samples[-1]
+    assert s.demand_velocity / MM == pytest.approx(sign * 100.0, abs=0.01)
+    b.step(100)
+    assert f["INVELOCITY"] and not f["ERROR"]
+    r = b.fb("HALT").run(DECELERATION=5000.0)
+    assert r.done and f["COMMANDABORTED"] and not f["INVELOCITY"] and not f["BUSY"]
+
+
+@needs_infinite
+def test_move_velocity_current_direction_follows_the_running_motion():
+    b = bench()
+    b.fb("MVA").run(POSITION=200.0, **MOVE)
+    b.fb("MVA").start(POSITION=20.0, VELOCITY=300.0, ACCELERATION=5000.0, DECELERATION=5000.0)
+    b.step(100)                                                  # moving in the negative direction
+    t0 = b.plc.time_ns
+    f = mvv(b, VELOCITY=50.0, DIRECTION="LM_DIR_CURRENT")
+    b.sim.run_until(lambda: f["INVELOCITY"] or f["ERROR"], max_scans=1000)
+    assert f["INVELOCITY"], (f["ERRORID"], f["DRIVEERROR"])
+    assert heads(b, t0)[-1] == 0x02F
+    assert b.drive.mc.trajectory.samples[-1].demand_velocity / MM == pytest.approx(-50.0, abs=0.01)
