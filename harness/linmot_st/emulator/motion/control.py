@@ -27,6 +27,7 @@ from .axis import Axis
 from .ct_runner import CtRunner
 from .fast_path import FastPath
 from .interpreter import Interpreter
+from ..linmot.master_encoder import MasterEncoder
 from .settings import MotionSettings
 from .setpoints import Hold
 from .state_machine import StateMachine
@@ -47,6 +48,7 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
         self.trajectory = Trajectory()
         self.executed: list[tuple[int, int, bytes]] = []   # (t_ns, header, parameters) of every command run
         self.ct_runner = CtRunner(self)
+        self.encoder = MasterEncoder(self.par, self.sync)      # the master encoder input ([MC] 7.3)
         self.running = False
         self.power_on_reset()
         self._reset_state()

@@ -177,3 +177,7 @@ HANDLERS: dict[Kind, Handler] = {
     Kind.PREDEF_VAI: _vai,
     Kind.TIME_CURVE: _time_curve,
 }
+
+# the kinds of their own modules (one line each)
+from .encoder_cams import HANDLERS as _CAM_HANDLERS  # noqa: E402
+HANDLERS.update(_CAM_HANDLERS)

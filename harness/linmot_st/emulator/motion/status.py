@@ -13,6 +13,7 @@ from ...protocol.upids import (
     V_DEMAND_POSITION_16, V_ACTUAL_POSITION_16, V_STATUS_WORD, V_CONTROL_WORD, V_WARN_WORD, V_LOGGED_ERROR,
     V_DEMAND_POSITION, V_TARGET_POSITION, V_POSITION_DIFFERENCE, V_DEMAND_VELOCITY, V_ACTUAL_VELOCITY,
 )
+from .encoder_cams import sync_variable
 from .trajectory import Sample
 from .units import VEL_RAW
 
@@ -169,7 +170,7 @@ class StatusWords:
             return int(round(self.gen.target))
         if upid == V_POSITION_DIFFERENCE:
             return int(round(self.dem_p - self.axis.position))
-        return None
+        return sync_variable(self, upid)        # master encoder, cams, force (encoder_cams.py)
 
     def _record(self, t: int) -> None:
         """After an event or a cycle: the outputs are brought up to date, the trajectory gets a sample."""

@@ -24,6 +24,7 @@ from .system import *  # noqa: F401,F403
 from .vai import *  # noqa: F401,F403
 from .curves import *  # noqa: F401,F403
 from .command_table import *  # noqa: F401,F403
+from .encoder_cam import *  # noqa: F401,F403
 
 
 def command_id(header: int) -> int:

@@ -28,6 +28,8 @@ class Kind(enum.Enum):
     TIME_CURVE = "time curve from the curve RAM"
     COMMAND_TABLE = "command-table control"
     WAIT = "command-table wait (acts only inside a command-table sequence)"
+    ENCODER_CAM = "encoder cam: define, enable/disable, go to sync position, set the counter"
+    TRIGGERED_CAM = "encoder cam armed on a trigger edge with delay counts"
 
 
 class Start(enum.Enum):
