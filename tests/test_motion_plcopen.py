@@ -32,6 +32,7 @@ def curves_and_table(b: MotionBench) -> None:
     b.drive.curves.ram[1] = Curve.build(1, [k * k * 100 for k in range(11)], x_length=5000)   # 0 .. 1 mm, 50 ms
     params = C.encode(C.VAI16_INCREMENT_DEM_POS, 0, target=10, vmax=500, acc=100, dec=100)[2:]
     b.drive.ct.ram[5] = build_entry(C.VAI16_INCREMENT_DEM_POS << 4, params)
+    b.drive.curves.ram[7] = Curve.build(7, [0, 10_000, 0], x_length=8000, object_type=0x0103, x_dim=0x001B)   # a cam
 
 
 @dataclass
@@ -59,6 +60,8 @@ SPECS = [
     Spec("MVADD", dict(DISTANCE=2.0, **MOVE), dict(DISTANCE=7.0), dict(DECELERATION=0.0)),
     Spec("SETPOS", dict(POSITION=12.5), dict(POSITION=20.0), dict(POSITION=1.0e6)),
     Spec("CMD", dict(CID=0x090, A=40, B=1000, C=100, D=100), dict(A=90), dict(CID=0x123)),
+    Spec("CAMSEL", dict(CAMTABLE=7, CAM=1), dict(CAMTABLE=8), dict(CAMTABLE=101), setup=curves_and_table),
+    Spec("CAMOUT", {}, abortable=False),
     Spec("WPAR", dict(UPID=0x14B0, VALUE=20000), dict(VALUE=30000), dict(UPID=0x5000), frames=(0x601,),
          abortable=False),
 ]

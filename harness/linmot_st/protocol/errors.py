@@ -128,7 +128,7 @@ ERRORS: tuple[ErrorDef, ...] = (
     ErrorDef("InvalidBusBudget", 0x0147, "process-data budget: Axes below 1, or a Bitrate that is not a multiple of 1000"),
     ErrorDef("UnknownCommand", 0x014C, "FB_LmMotionCommand: the command ID is none the encoder knows (the catalogue, F_LmMotionEncode)"),
     ErrorDef("JogDirection", 0x014D, "FB_LmJog: JogForward and JogBackward both TRUE"),
-    ErrorDef("MotionEnded", 0x014E, "FB_LmMoveVelocity: the drive ended the infinite motion without a newer command (a position limit)"),
+    ErrorDef("MotionEnded", 0x014E, "FB_LmMoveVelocity / FB_LmCamIn: the drive ended the infinite motion or the cam operation without a newer command (a position limit)"),
     # 07xx motion (st_lib/motion): the axis, the process data, the command handshake
     ErrorDef("AxisNotEnabled", 0x0701, "the axis is not in Operation Enabled (state 8): power it with FB_LmPower first"),
     ErrorDef("AxisNotHomed", 0x0702, "the move needs the axis homed (FB_LmHome, or a master homing)"),
