@@ -62,6 +62,9 @@ SPECS = [
     Spec("CMD", dict(CID=0x090, A=40, B=1000, C=100, D=100), dict(A=90), dict(CID=0x123)),
     Spec("CAMSEL", dict(CAMTABLE=7, CAM=1), dict(CAMTABLE=8), dict(CAMTABLE=101), setup=curves_and_table),
     Spec("CAMOUT", {}, abortable=False),
+    Spec("WDO", dict(CONNECTOR="LM_IO_X4", OUTPUTNUMBER=1, VALUE=True), dict(OUTPUTNUMBER=2),
+         dict(OUTPUTNUMBER=20)),
+    Spec("ABORTTRIG", {}),
     Spec("WPAR", dict(UPID=0x14B0, VALUE=20000), dict(VALUE=30000), dict(UPID=0x5000), frames=(0x601,),
          abortable=False),
 ]

@@ -35,10 +35,11 @@ def test_rows_are_consistent():
         assert c.kind in HANDLERS, f"{cid:03X}h: no handler for {c.kind}"
         assert len(c.fields) <= 4 and len(set(c.field_names)) == len(c.fields)
         assert c.states and c.states <= C.IN_ANY_STATE and c.drives
-        assert c.source.startswith("[MC] 4.3.")
+        assert c.source.startswith(("[MC] 4.3.", "seed 004 4.3."))     # 004xh: in the seed only
     # system commands run in every state, motion only in Operation Enabled (seed 004 3.7)
     assert {cid for cid, c in C.COMMANDS.items() if c.states == C.IN_ANY_STATE} == {
-        C.NOP, C.WRITE_CONTROL_WORD, C.WRITE_LIVE_PARAMETER}
+        C.NOP, C.WRITE_CONTROL_WORD, C.WRITE_LIVE_PARAMETER, C.WRITE_X4_OUTPUTS, C.WRITE_X6_OUTPUTS,
+        C.CLEAR_EVENT_EVALUATION}
     assert C.COMMANDS[C.VAI_GO_TO_POS].transport is C.Transport.COMMAND_TABLE      # 16 bytes: only in a CT entry
     assert C.COMMANDS[C.VAI16_GO_TO_POS].transport is C.Transport.RXPDO3          # 8 bytes
     assert C.COMMANDS[C.PREDEF_VAI_GO_TO_POS].transport is C.Transport.RXPDO2     # 4 bytes

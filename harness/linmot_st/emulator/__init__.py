@@ -14,11 +14,13 @@ from .linmot.command_table import CommandTable, build_entry
 from .linmot.curves import Curve, CurveStore
 from .linmot.drive import BOOTING, OFF, OPERATIONAL, PRE_OPERATIONAL, STOPPED, DriveTimings, E1100Drive
 from .linmot.errorlog import ErrorEntry, ErrorLog
+from .linmot.io import DriveIO, IoSettings
 from .linmot.options import ProtocolOptions
 from .linmot.profile import DriveProfile, ParamDef, ProfileError, load_profile
 
 __all__ = [
     "E1100Drive", "DriveTimings", "ProtocolOptions", "DriveProfile", "ParamDef", "ProfileError", "load_profile",
     "Curve", "CurveStore", "CommandTable", "build_entry", "ErrorLog", "ErrorEntry", "SdoAbort",
+    "DriveIO", "IoSettings",
     "OFF", "BOOTING", "PRE_OPERATIONAL", "OPERATIONAL", "STOPPED",
 ]

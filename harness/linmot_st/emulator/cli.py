@@ -29,6 +29,11 @@ def register(subparsers) -> None:
     p.add_argument("--dump-memory", metavar="FILE",
                    help="when stopped, write the drive's memory (parameters ROM and RAM, curves and command table "
                         "in RAM and flash) to FILE as JSON (emulator/linmot/memory.py), to check what a PLC wrote")
+    p.add_argument("--input", metavar="FILE",
+                   help="an input script: signals on the drive's I/O (X4.6 trigger, X4.4 analog, ...), one per line, "
+                        "times in s from power-on (emulator/linmot/io_script.py; docs/emulator.md 'The drive's I/O')")
+    p.add_argument("--signal", action="append", default=[], metavar="LINE",
+                   help="one input-script line, e.g. 'pulse X4.6 2.0 0.1 0.02 5' or '1.5 X4.6 1' (repeatable)")
     p.set_defaults(func=run)
 
 
@@ -69,6 +74,17 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as exc:
         return _error(str(exc), 2)
     drive = make_drive(model, args.node_id, profile=profile, timings=DriveTimings.fast() if args.fast else None)
+    from .linmot.io_script import ScriptError, apply_line, apply_script
+    try:
+        if args.input:
+            with open(args.input) as f:
+                apply_script(drive.io, f.read())
+        for line in args.signal:
+            apply_line(drive.io, line)
+    except OSError as exc:
+        return _error(f"--input {args.input}: {exc.strerror or exc}", 2)
+    except ScriptError as exc:
+        return _error(f"input script: {exc}", 2)
     try:
         bus = open_bus(spec, bitrate=args.bitrate)
     except (can.CanError, OSError, ValueError, ImportError) as exc:

@@ -192,6 +192,21 @@ class Rig:
         """The first drive."""
         return next(iter(self.drives.values()))
 
+    def io(self, node: int | None = None):
+        """The I/O of a drive (the first by default): emulator/linmot/io.py's DriveIO (input, set_input,
+        pulse_train, analog_ramp, output, outputs)."""
+        return (self.drive if node is None else self.drives[node]).io
+
+    def set_input(self, name: str, level: float, *, at_ms: float | None = None, node: int | None = None) -> None:
+        """A drive input changes at at_ms (rig time; default now): a digital pin ("X4.6") to 0/1, or "X4.4" to
+        volts."""
+        io = self.io(node)
+        t = self.bus.now if at_ms is None else round(at_ms * 1e6)
+        if name == "X4.4":
+            io.set_analog(level, max(t, io.clock()))
+        else:
+            io.set_input(name, int(level), max(t, io.clock()))
+
     # -- variables ---------------------------------------------------------------------------------------
     def __getitem__(self, path: str) -> Any:
         return self.plc[path]

@@ -43,3 +43,13 @@ P_TRIG_CAM_CURVE_RISE, P_TRIG_CAM_CURVE_FALL = 0x154A, 0x154B        # [MC] 4.3.
 P_TRIG_CAM_DELAY_RISE, P_TRIG_CAM_DELAY_FALL = 0x154C, 0x154D        # [MC] 4.3.63..68
 V_CAM_ENABLED = 0x1BA9                                               # [MC] 5.5.2
 V_MASTER_ENCODER_COUNTS, V_MASTER_ENCODER_SPEED = 0x1BA0, 0x1BA1     # INVENTED
+# the drive's I/O (emulator/linmot/io.py) and the triggered commands (emulator/motion/triggered.py)
+P_TRIGGER_MODE = 0x170C                                              # [MC] 7.2.2
+P_TRIG_RISE_INHIBIT, P_TRIG_FALL_INHIBIT = 0x170D, 0x170E            # [MC] 7.2.2.2
+P_TRIG_RISE_DELAY, P_TRIG_FALL_DELAY = 0x170F, 0x1710                # [MC] 7.2.2.3
+P_LIMIT_SWITCH_ERROR = 0x121B                                        # [MC] 7.2.3 (0 none, 1 power off, 2 quick stop)
+P_ANALOG_POS_MIN, P_ANALOG_POS_MAX = 0x14DC, 0x14DD                  # INVENTED (019xh: position at X4.4 min / max)
+P_TRIG_RISE_TARGET, P_TRIG_RISE_VMAX, P_TRIG_RISE_ACC, P_TRIG_RISE_DEC = 0x14F0, 0x14F1, 0x14F2, 0x14F3  # INVENTED
+P_TRIG_FALL_TARGET, P_TRIG_FALL_VMAX, P_TRIG_FALL_ACC, P_TRIG_FALL_DEC = 0x14F4, 0x14F5, 0x14F6, 0x14F7  # INVENTED
+V_CAPTURED_POSITION = 0x1E62                                         # [MC] 4.3.122/123
+V_X4_INPUTS, V_X4_OUTPUTS, V_X6_OUTPUTS, V_ANALOG_X4_4 = 0x1DA0, 0x1DA1, 0x1DA2, 0x1DA3   # INVENTED

@@ -22,6 +22,7 @@ from ..cia301.objects import CommObjects
 from ..cia301.pdo import ProcessData
 from .curves import CurveStore
 from .errorlog import ErrorLog
+from .io import DriveIO, IoSettings
 from .manufacturer import ManufacturerObjects
 from ..cia301.sdo import Reply
 from ..motion import MotionControl, MotionSettings
@@ -95,7 +96,7 @@ class E1100Drive(NmtSlave):
     def __init__(self, node_id: int = 1, profile: DriveProfile | None = None, timings: DriveTimings | None = None,
                  *, protocol: ProtocolOptions | None = None, curve_capacity_bytes: int = 256 * 1024,
                  error_log: ErrorLog | None = None, motion: MotionSettings | None = None,
-                 model: DriveModel = E1100):
+                 model: DriveModel = E1100, io: IoSettings | None = None):
         if not 1 <= node_id <= 127:
             raise ValueError(f"CANopen node ID {node_id} is outside 1..127")
         self.node_id = node_id
@@ -113,6 +114,8 @@ class E1100Drive(NmtSlave):
         self.mc = MotionControl(self.motion, self.timings.hw_test_ns, self.params, self.curves, self.ct,
                                 self._log_error)
         self.params.live = self.mc.variable
+        self.io = DriveIO(io, par=self.mc.par)
+        self._wire_io()
         self.pdo = ProcessData(self)
         self.mc_phase = "stopped"          # stopped | starting | running | stopping
         self.comm = CommObjects(node_id, self.profile.identity, self._heartbeat_power_on_ms,
@@ -179,6 +182,9 @@ class E1100Drive(NmtSlave):
             if self._live(ev):
                 self.now_ns = max(self.now_ns, ev.t)
                 ev.fn(ev.t)
+        if self.io._events and self.io._events[0][0] <= t_ns:
+            self.io.on_timer(t_ns)              # input changes (each brings the MC to its time first)
+            self.pdo.publish(t_ns)
         mc_t = self.mc.next_timer_ns()
         if mc_t is not None and mc_t <= t_ns:
             self.mc.on_timer(t_ns)
@@ -215,7 +221,22 @@ class E1100Drive(NmtSlave):
         other = pdo.next_timer_ns()
         if other is not None and (t is None or other < t):
             t = other
+        io = self.io._events
+        if io and (t is None or io[0][0] < t):
+            t = io[0][0]
         return t
+
+    def _wire_io(self) -> None:
+        """The I/O's listeners: the MC runs to the time of a change first; the trigger edges go to its event
+        handler, the limit switches to their check; X4.5 captures the actual position."""
+        io, mc = self.io, self.mc
+        io.changes = mc.trajectory.io
+        io.clock = lambda: self.now_ns
+        io.before_change = mc.sync
+        io.on_trigger = mc.events.on_trigger
+        io.on_capture = lambda t: int(round(mc.axis.position))
+        io.on_level = mc.events.on_limit_switch if io.s.limit_switches else (lambda pin, level, t: None)
+        mc.io = io
 
     # ------------------------------------------------------------------ inspection
     @property

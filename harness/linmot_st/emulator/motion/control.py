@@ -25,6 +25,8 @@ from ...protocol.upids import (
 )
 from .axis import Axis
 from .ct_runner import CtRunner
+from .events import EventHandler
+from . import triggered  # noqa: F401 (registers the I/O and triggered commands' handlers)
 from .fast_path import FastPath
 from .interpreter import Interpreter
 from ..linmot.master_encoder import MasterEncoder
@@ -49,6 +51,8 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
         self.executed: list[tuple[int, int, bytes]] = []   # (t_ns, header, parameters) of every command run
         self.ct_runner = CtRunner(self)
         self.encoder = MasterEncoder(self.par, self.sync)      # the master encoder input ([MC] 7.3)
+        self.events = EventHandler(self)
+        self.io = None                      # the drive's I/O (emulator/linmot/io.py), set by the drive
         self.running = False
         self.power_on_reset()
         self._reset_state()
@@ -86,6 +90,7 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
         self._prev_vd = 0.0
         self._now = getattr(self, "_now", 0)
         self.ct_runner.stop()
+        self.events.clear()
 
     # ------------------------------------------------------------------ parameters
     def par(self, upid: int, default: int = 0) -> int:
@@ -261,6 +266,8 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
                 self._monitor(t)
             if self.state in W.SPECIAL_STATES:
                 self._progress_special(t)
+            if self.events.pending:
+                self.events.step(t)
             if self.ct_runner.running:
                 self.ct_runner.step(t)
             if self.after_stop is not None and self.gen.done(t):
@@ -271,7 +278,7 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
                     self._power_off(t, W.SWITCH_ON_DISABLED)
         # keep cycling while anything can still change
         self._update_in_target(t)
-        busy = (not self.gen.done(t) or self.ct_runner.running or axis.blocked
+        busy = (not self.gen.done(t) or self.ct_runner.running or axis.blocked or self.events.pending
                 or (self.state in W.SPECIAL_STATES and self.sub != W.SUB_FINISHED)
                 or (self._in_window_since is not None and not self.in_target))
         if self.controlled:

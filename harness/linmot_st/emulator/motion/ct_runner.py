@@ -15,6 +15,7 @@ from ...protocol import commands as C
 from ...protocol import words as W
 
 END = 0xFFFF
+_TRIGGER_WAITS = (C.WAIT_RISING_TRIGGER, C.WAIT_FALLING_TRIGGER)
 
 
 class CtRunner:
@@ -49,6 +50,8 @@ class CtRunner:
                 return
             if kind == C.WAIT_IN_TARGET_POSITION and not mc.in_target:
                 return
+            if kind in _TRIGGER_WAITS and not mc.events.edge_since(kind == C.WAIT_RISING_TRIGGER, until):
+                return
             self._wait = None
             self._advance(self._link)
         if not self.running or self.entry is None:
@@ -66,10 +69,12 @@ class CtRunner:
         if cid == C.START_COMMAND_TABLE:
             self._advance(struct.unpack_from("<H", params, 0)[0])
             return
-        if cid in (C.WAIT_TIME, C.WAIT_MOTION_FINISHED, C.WAIT_IN_TARGET_POSITION):
-            until = t + struct.unpack_from("<I", params, 0)[0] * 100_000 if cid == C.WAIT_TIME else None
+        if cid in (C.WAIT_TIME, C.WAIT_MOTION_FINISHED, C.WAIT_IN_TARGET_POSITION) or cid in _TRIGGER_WAITS:
+            # Wait Time: until then; a trigger wait: the next edge at or after now (213xh/214xh, [MC] 4.3.171/172)
+            until = t + struct.unpack_from("<I", params, 0)[0] * 100_000 if cid == C.WAIT_TIME else t
             self._wait = (cid, until)
             self.entry = None
+            self.mc._wake(t)            # the wait is checked every cycle (also when it is the first entry)
             return
         if not self.mc.execute(header, params, t, from_table=True):
             self.stop()

@@ -248,6 +248,7 @@ class StateMachine:
         """An error: logged; during a motion a quick stop first (state 14), then state 4, power stage off."""
         self._log_error(code, t)
         self.ct_runner.stop()
+        self.events.clear()
         self.error_code = code
         self.fatal = code in W.FATAL_ERRORS
         if self.controlled and self._moving(t):

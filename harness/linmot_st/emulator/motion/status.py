@@ -12,6 +12,7 @@ from ...protocol.upids import (
     P_SCALE_POS, P_RANGE1_UPID, P_RANGE1_MIN, P_RANGE1_MAX, V_STATE_VAR, V_ACTUAL_POSITION, V_DEMAND_CURRENT,
     V_DEMAND_POSITION_16, V_ACTUAL_POSITION_16, V_STATUS_WORD, V_CONTROL_WORD, V_WARN_WORD, V_LOGGED_ERROR,
     V_DEMAND_POSITION, V_TARGET_POSITION, V_POSITION_DIFFERENCE, V_DEMAND_VELOCITY, V_ACTUAL_VELOCITY,
+    V_CAPTURED_POSITION, V_X4_INPUTS, V_X4_OUTPUTS, V_X6_OUTPUTS, V_ANALOG_X4_4,
 )
 from .encoder_cams import sync_variable
 from .trajectory import Sample
@@ -75,6 +76,8 @@ class StatusWords:
             bits |= W.SW_SWITCH_ON_LOCKED
         if warn:
             bits |= W.SW_WARNING
+        if self.events.armed is not None:
+            bits |= W.SW_EVENT_HANDLER
         if s in W.SPECIAL_STATES and self.sub != W.SUB_FINISHED:
             bits |= W.SW_SPECIAL_MOTION
         if self.in_target:
@@ -113,6 +116,8 @@ class StatusWords:
                 low |= W.SV_IN_TARGET
             if self.homed:
                 low |= W.SV_HOMED
+            if self.events.armed is not None:
+                low |= W.SV_EVENT_HANDLER
         elif s in W.SPECIAL_STATES:
             low = self.sub
         else:
@@ -170,6 +175,18 @@ class StatusWords:
             return int(round(self.gen.target))
         if upid == V_POSITION_DIFFERENCE:
             return int(round(self.dem_p - self.axis.position))
+        io = self.io
+        if io is not None:
+            if upid == V_CAPTURED_POSITION:
+                return io.captured_position
+            if upid == V_X4_INPUTS:
+                return io.input_word()
+            if upid == V_X4_OUTPUTS:
+                return io.outputs("X4")
+            if upid == V_X6_OUTPUTS:
+                return io.outputs("X6")
+            if upid == V_ANALOG_X4_4:
+                return _s16(io.analog() * 1000)
         return sync_variable(self, upid)        # master encoder, cams, force (encoder_cams.py)
 
     def _record(self, t: int) -> None:

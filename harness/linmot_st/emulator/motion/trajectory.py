@@ -1,7 +1,8 @@
 """The trajectory record of one drive: what the axis did, for assertions and plots.
 
 One sample per MC cycle while anything moves, and one at each event (a command, a state change), so a
-standing axis costs nothing. Positions in pu (0.1 um), velocities in pu/s.
+standing axis costs nothing. Positions in pu (0.1 um), velocities in pu/s. Beside the samples, `io` holds every
+change of the drive's I/O (emulator/linmot/io.py's IoChange: time, pin or "trigger", level or volts).
 """
 
 from __future__ import annotations
@@ -34,6 +35,7 @@ class Trajectory:
 
     def __init__(self) -> None:
         self.samples = []
+        self.io: list = []           # IoChange records, in time order (the drive's DriveIO appends them)
 
     def add(self, sample: Sample) -> None:
         s = self.samples
@@ -50,6 +52,17 @@ class Trajectory:
 
     def clear(self) -> None:
         self.samples.clear()
+        self.io.clear()
+
+    def io_at(self, name: str, t_ns: int):
+        """The level (volts for X4.4) of an I/O pin, or of "trigger", at t_ns; None before its first change."""
+        found = None
+        for c in self.io:
+            if c.t_ns > t_ns:
+                break
+            if c.name == name:
+                found = c.value
+        return found
 
     def __len__(self) -> int:
         return len(self.samples)

@@ -30,6 +30,12 @@ class Kind(enum.Enum):
     WAIT = "command-table wait (acts only inside a command-table sequence)"
     ENCODER_CAM = "encoder cam: define, enable/disable, go to sync position, set the counter"
     TRIGGERED_CAM = "encoder cam armed on a trigger edge with delay counts"
+    IO_OUTPUTS = "write interface outputs with a mask"
+    CLEAR_EVENTS = "clear the event handler"
+    ON_TRIGGER = "armed in the event handler, run on every trigger edge until 008xh"
+    VAI_CAPTURED = "VAI to the captured position plus an increment"
+    VAI_ANALOG = "VAI to the position the analog input X4.4 sets"
+    VAI_TRIG_CONFIG = "VAI with the Trig Rise / Trig Fall Config parameters"
 
 
 class Start(enum.Enum):
