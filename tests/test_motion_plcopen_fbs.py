@@ -315,3 +315,49 @@ def test_move_velocity_current_direction_follows_the_running_motion():
     assert f["INVELOCITY"], (f["ERRORID"], f["DRIVEERROR"])
     assert heads(b, t0)[-1] == 0x02F
     assert b.drive.mc.trajectory.samples[-1].demand_velocity / MM == pytest.approx(-50.0, abs=0.01)
+
+
+# ---------------------------------------------------------------- every VAI variant: VAI Dec=Acc
+HAS_DEC_ACC = all(c in C.COMMANDS for c in (0x0C0, 0x0C1, 0x0C2))
+needs_dec_acc = pytest.mark.skipif(not HAS_DEC_ACC, reason="the catalogue has no VAI Dec=Acc rows yet (branch vai20)")
+
+
+def bench12() -> MotionBench:
+    """RxPDO3 maps par bytes 6..11: 12-byte commands fit."""
+    return MotionBench(nodes=1, defaults={0x2041: 2}, pdo={"RX3BYTES": 8}).ready()
+
+
+@needs_dec_acc
+@pytest.mark.parametrize("fb, inputs, cid, end_mm", [
+    ("MVA", dict(POSITION=123.4567), 0x0C0, 123.4567),
+    ("MVR", dict(DISTANCE=-5.4321), 0x0C1, 50.0 - 5.4321),
+    ("MVADD", dict(DISTANCE=7.0001), 0x0C2, 57.0001),
+])
+def test_32_bit_moves_with_acc_equal_dec_go_as_one_dec_acc_command(fb, inputs, cid, end_mm):
+    b = bench12()
+    assert b.fb("MVA").run(POSITION=50.0, **MOVE).done
+    t0 = b.plc.time_ns
+    r = b.fb(fb).run(**inputs, VELOCITY=333.3, ACCELERATION=7777.0, DECELERATION=7777.0)
+    assert r.done, r
+    assert heads(b, t0) == [cid]
+    frame = b.payloads(0x301, t0)[0] + b.payloads(0x401, t0)[0][2:]
+    assert struct.unpack_from("<iII", frame, 2)[1:] == (333_300, 777_700)
+    assert abs(b.drive.mc.dem_p - end_mm * MM) < 1
+
+
+@needs_dec_acc
+def test_dec_acc_forced_refusals_and_the_default_pdos():
+    b = bench()                                   # the default mapping: 8 parameter bytes
+    t0 = b.plc.time_ns
+    r = b.fb("MVA").run(POSITION=12.34567, VELOCITY=333.3, ACCELERATION=7777.0, DECELERATION=7777.0)
+    assert r.done and heads(b, t0) == [0x002, 0x002, 0x002, 0x020]          # AUTO: predefined VAI
+    r = b.fb("MVA").run(POSITION=20.0, VELOCITY=333.3, ACCELERATION=7777.0, DECELERATION=7777.0,
+                        COMMAND="LM_VAI_DEC_ACC", max_scans=5)
+    assert r.error and r.error_id == E["CommandNotMapped"]
+    b = bench12()
+    t0 = b.plc.time_ns
+    r = b.fb("MVA").run(POSITION=20.0, VELOCITY=333.3, ACCELERATION=7777.0, DECELERATION=6666.0,
+                        COMMAND="LM_VAI_DEC_ACC", max_scans=5)
+    assert r.error and r.error_id == E["InvalidDeceleration"] and no_motion_frames(b, t0)
+    r = b.fb("MVA").run(POSITION=20.0, **MOVE, COMMAND="LM_VAI_DEC_ACC")   # 16-bit-exact, forced 0C0xh
+    assert r.done and heads(b, t0) == [0x0C0]
