@@ -361,3 +361,55 @@ def test_dec_acc_forced_refusals_and_the_default_pdos():
     assert r.error and r.error_id == E["InvalidDeceleration"] and no_motion_frames(b, t0)
     r = b.fb("MVA").run(POSITION=20.0, **MOVE, COMMAND="LM_VAI_DEC_ACC")   # 16-bit-exact, forced 0C0xh
     assert r.done and heads(b, t0) == [0x0C0]
+
+
+# ---------------------------------------------------------------- BufferMode Buffered: After Actual Command
+HAS_AFTER = all(c in C.COMMANDS for c in (0x098, 0x028))
+needs_after = pytest.mark.skipif(not HAS_AFTER, reason="the catalogue has no After Actual Command rows yet (vai20)")
+
+
+@needs_after
+@pytest.mark.parametrize("position, cid", [(30.0, 0x098), (30.0005, 0x028)])
+def test_buffered_move_runs_after_the_running_one_which_ends_done(position, cid):
+    b = bench()
+    t0 = b.plc.time_ns
+    first = b.fb("MVA")
+    first.start(POSITION=120.0, VELOCITY=500.0, ACCELERATION=10000.0, DECELERATION=10000.0)
+    b.step(30)
+    assert first["ACTIVE"]
+    second = b.fb("MVA2")
+    second.start(POSITION=position, VELOCITY=500.0, ACCELERATION=10000.0, DECELERATION=10000.0,
+                 BUFFERMODE="LM_BUFFER_BUFFERED")
+    b.step(30)
+    assert first["BUSY"] and first["ACTIVE"] and not first["COMMANDABORTED"]
+    assert second["BUSY"] and not second["ACTIVE"]                    # queued on the drive
+    b.sim.run_until(lambda: first["DONE"] or first["ERROR"] or first["COMMANDABORTED"], max_scans=2000)
+    assert first["DONE"], (first["ERRORID"], first["COMMANDABORTED"])
+    reached = b.drive.mc.trajectory.between(t0)
+    assert max(s.demand for s in reached) == pytest.approx(120 * MM, abs=1)   # the first reached its target
+    b.sim.run_until(lambda: second["DONE"] or second["ERROR"], max_scans=2000)
+    assert second["DONE"] and abs(b.drive.mc.axis.position - position * MM) <= 1000
+    assert heads(b, t0)[-1] == cid
+
+
+@needs_after
+def test_an_aborting_move_aborts_both_the_running_and_the_buffered_one():
+    b = bench()
+    first = b.fb("MVA")
+    first.start(POSITION=120.0, VELOCITY=500.0, ACCELERATION=10000.0, DECELERATION=10000.0)
+    b.step(30)
+    second = b.fb("MVA2")
+    second.start(POSITION=30.0, VELOCITY=500.0, ACCELERATION=10000.0, DECELERATION=10000.0,
+                 BUFFERMODE="LM_BUFFER_BUFFERED")
+    b.step(30)
+    r = b.fb("HALT").run(DECELERATION=10000.0)
+    assert r.done
+    assert first["COMMANDABORTED"] and second["COMMANDABORTED"]
+
+
+@pytest.mark.skipif(HAS_AFTER, reason="the catalogue has the After Actual Command rows")
+def test_buffered_without_the_rows_refused_before_any_frame():
+    b = bench()
+    t0 = b.plc.time_ns
+    r = b.fb("MVA").run(POSITION=30.0, **MOVE, BUFFERMODE="LM_BUFFER_BUFFERED", max_scans=5)
+    assert r.error and r.error_id == E["UnknownCommand"] and no_motion_frames(b, t0)
