@@ -5,7 +5,12 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test bench venv clean
+.PHONY: demo test st-coverage bench venv clean
+
+# st_lib's coverage comes from the tests of st_lib (a subset: coverage builds of the whole suite would
+# compile every test's program again for little more of st_lib; docs/coverage.md)
+ST_COVERAGE_TESTS := tests/test_stlib_*.py tests/test_motion_fbs.py tests/test_motion_budget.py \
+                     tests/test_commission_st.py
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -19,8 +24,15 @@ demo: $(STAMP)
 	mkdir -p build
 	$(BIN)/linmot-st motion examples/two_axes.pvl --axes 2 --drive-timings real --report build/report
 
+# st_lib's coverage first, so that the whole suite's summary is the last line CI reads
 test: $(STAMP)
+	$(MAKE) st-coverage
 	$(BIN)/pytest -q -n 2
+
+# st_lib's line and branch coverage: the table per file, build/st-coverage/{coverage.xml,html/index.html}
+st-coverage: $(STAMP)
+	$(BIN)/pytest -q -n 2 -p no:cacheprovider --linmot-cov --linmot-cov-dir build/st-coverage \
+	  -o linmot_st_cov_pous=false $(ST_COVERAGE_TESTS)
 
 bench: $(STAMP)
 	$(BIN)/python -m linmot_st.bench

@@ -298,8 +298,159 @@ def test_inputs_are_readable_and_recorded():
     io.set_analog(2.5, link.t + 2 * MS)
     link.advance(5 * MS)
     assert io.input("X4.7") == 1 and io.analog() == 2.5
+    io.set_input("X6.2", 1)
+    link.advance(MS)
+    assert io.input_word("X6") == 0b100 and io.input_word() == 1 << 4 and io.outputs("X6") == 0
     assert link.drive.mc.variable(0x1DA0) == 1 << 4 and link.drive.mc.variable(0x1DA3) == 2500
     with pytest.raises(ValueError):
         io.set_input("X4.6", 1, link.t - MS)                   # the past cannot change
     with pytest.raises(KeyError):
         io.set_input("X9.1", 1)
+
+
+# ---------------------------------------------------------------- every row of this part of issue 20 is accepted
+from linmot_st.protocol.commands.triggered import TRIGGERED  # noqa: E402
+
+ROWS = sorted(set(TRIGGERED) | {C.WRITE_X4_OUTPUTS, C.WRITE_X6_OUTPUTS, C.CLEAR_EVENT_EVALUATION,
+                                C.VAI_GO_TO_ANALOG_POS, C.VAI_INCREMENT_CAPTURED_POS, C.VAI_START_TRIG_RISE_CONFIG,
+                                C.VAI_START_TRIG_FALL_CONFIG, C.WAIT_RISING_TRIGGER, C.WAIT_FALLING_TRIGGER})
+SMALL = {"target": 10, "vmax": 100, "acc": 100, "dec": 100, "curve_id": 1, "offset": 0, "curve_time": 100_000,
+         "amplitude": 1000, "entry": 1, "mask": 1, "value": 1}
+
+
+@pytest.mark.parametrize("cid", ROWS, ids=lambda c: f"{c:03X}h")
+def test_every_row_is_accepted(cid):
+    """Sent as the catalogue's transport says: RxPDO2 + RxPDO3 (2041h = 2: parameter bytes 6..11) up to 12
+    bytes, a command-table entry started by 200xh beyond; the drive runs it without 0081h or any other error."""
+    row = C.COMMANDS[cid]
+    link = homed_link(**{"x2041": 2})
+    d = link.drive
+    d.ct.ram[1] = build_entry(C.NOP << 4, b"")
+    fields = {n: SMALL[n] for n in row.field_names}
+    if row.transport is C.Transport.COMMAND_TABLE:
+        d.ct.ram[9] = build_entry(cid << 4, C.encode(cid, 0, **fields)[2:])
+        link.command(C.START_COMMAND_TABLE, entry=9)
+    else:
+        link.command(cid, **fields)
+    link.advance(20 * MS)
+    assert d.mc.error_code == 0 and d.mc.state == W.OPERATION_ENABLED, f"{d.mc.error_code:04X}h"
+    assert d.mc.state_var & 0x0F == link.count                               # the count is echoed: executed
+    assert [h >> 4 for _, h, _ in d.mc.executed][-1] == cid
+    assert bool(d.mc.status_word & W.SW_EVENT_HANDLER) == (cid in TRIGGERED)
+
+
+# ---------------------------------------------------------------- the fast path and the inputs
+def _bus_run(quiet: bool):
+    """On a SimBus with SYNC every 4 ms (TxPDO2 on SYNC: quiet cycles are computed ahead of the bus), a
+    re-armed increment on the trigger while a pulse train plays; one pulse arrives during a motion."""
+    import struct
+
+    from linmot_st.bus import Frame, SimBus
+    from linmot_st.bus.nodes import ScriptedNode
+    from linmot_st.emulator.motion import MotionSettings
+
+    def cmd(cid, count, **fields):
+        raw = C.encode(cid, count, **fields).ljust(10, b"\0")
+        return [Frame(0x301, raw[:8]), Frame(0x401, raw[:2] + raw[8:10])]
+
+    cw = lambda w: Frame(0x201, struct.pack("<H", w))                               # noqa: E731
+    s = [(50 * MS, Frame(0x601, struct.pack("<BHBBxxx", 0x2F, 0x1801, 2, 1))),
+         (60 * MS, Frame(0x000, b"\x01\x01")), (61 * MS, cw(0x003E)), (70 * MS, cw(0x003F)),
+         (120 * MS, cw(0x083F)), (150 * MS, cw(0x003F))]
+    s += [(200 * MS, f) for f in cmd(0x02B, 1, target=10 * MM)]
+    s += [(k * 4 * MS, Frame(0x080, b"")) for k in range(15, 400)]
+    profile = load_profile().with_defaults({0x1194: 2, 0x170C: 4, 0x170D: 20, 0x170F: 35, **PREDEF})
+    drive = E1100Drive(1, profile, timings=DriveTimings.fast(), motion=MotionSettings(quiet_cycles=quiet))
+    bus = SimBus(1_000_000)
+    bus.attach(drive, "drive")
+    bus.attach(ScriptedNode(sorted(s, key=lambda x: x[0])), "master")
+    drive.power_on(0)
+    drive.io.pulse_train("X4.6", 250 * MS + 123_456, 90 * MS, 30 * MS, 6)
+    drive.io.play("X4.6", [(900 * MS, 1), (900 * MS + 500_000, 0), (901 * MS, 1), (950 * MS, 0)])   # bounces
+    for k in range(1, 17):
+        bus.run_until(k * 100 * MS)
+    trace = [(e.start_ns, e.frame.can_id, bytes(e.frame.data)) for e in bus.trace]
+    return trace, list(drive.mc.trajectory.samples), drive
+
+
+def test_triggered_moves_are_the_same_with_quiet_cycles():
+    ref_trace, ref_samples, ref = _bus_run(False)
+    trace, samples, drive = _bus_run(True)
+    assert len(ref.mc.events.fired) == 7 and drive.mc.events.fired == ref.mc.events.fired
+    assert drive.mc.error_code == 0 and abs(drive.mc.axis.position - 70 * MM) < 10    # seven 10 mm steps
+    assert trace == ref_trace and samples == ref_samples
+    assert drive.mc.trajectory.io == ref.mc.trajectory.io
+    # each run starts in the first MC cycle after its (inhibited, then 3.5 ms delayed) edge
+    edges = [c.t_ns for c in drive.mc.trajectory.io if c.name == "trigger" and c.value == 1]
+    assert len(edges) == 7 and all(e < f <= e + CYCLE for e, f in zip(edges, drive.mc.events.fired))
+
+
+def test_x43_as_brake_output_follows_operation_enabled():
+    """[MC] 7.2.1.1: with brake mode 1717h the brake is released (X4.3 = 24 V) while Operation Enabled is set;
+    003xh does not drive it then."""
+    link = homed_link(**{"x1717": 1})
+    io = link.drive.io
+    assert io.output("X4.3") == 1
+    link.command(C.WRITE_X4_OUTPUTS, mask=0b11, value=0b10)
+    link.advance(2 * MS)
+    assert io.output("X4.3") == 1 and io.output("X4.4") == 1
+    link.cw(0x0037)                                              # enable operation off: state 6
+    link.advance(5 * MS)
+    assert link.drive.mc.state == W.READY_TO_OPERATE and io.output("X4.3") == 0 and io.outputs("X4") == 0b10
+
+
+def test_vai_go_to_analog_pos_can_follow_the_input():
+    """MotionSettings(analog_target_follows=True): the target follows X4.4 until another motion replaces it."""
+    from linmot_st.emulator.motion import MotionSettings
+
+    values = {0x1194: 2, 0x146F: 280 * MM, 0x146E: -10 * MM, 0x14DC: 0, 0x14DD: 200 * MM, **PREDEF}
+    d = E1100Drive(1, load_profile().with_defaults(values), timings=DriveTimings.fast(),
+                   motion=MotionSettings(analog_target_follows=True))
+    link = MotionLink(d)
+    link.enable()
+    link.home()
+    d.io.set_analog(1.0, link.t)
+    d.ct.ram[2] = build_entry(C.VAI_GO_TO_ANALOG_POS << 4,
+                              C.encode(C.VAI_GO_TO_ANALOG_POS, 0, vmax=500_000, acc=500_000, dec=500_000)[2:])
+    link.command(C.START_COMMAND_TABLE, entry=2)
+    link.advance(300 * MS)
+    assert abs(d.mc.axis.position - 20 * MM) < 10                            # 1 V: 20 mm
+    d.io.analog_ramp(link.t, link.t + 200 * MS, 1.0, 4.0, steps=20)
+    link.advance(600 * MS)
+    assert abs(d.mc.axis.position - 80 * MM) < 10                            # followed to 4 V: 80 mm
+    link.command(C.PREDEF_VAI_GO_TO_POS, target=10 * MM)                      # another motion ends following
+    d.io.set_analog(9.0, link.t + 10 * MS)
+    link.advance(600 * MS)
+    assert abs(d.mc.axis.position - 10 * MM) < 10 and d.mc.events.follow is None
+
+
+def test_the_st_encoder_encodes_every_row_as_the_catalogue(tmp_path):
+    """F_LmMotionEncode (st_lib/motion/codec_gen.st, generated from the catalogue) against the Python codec for
+    every row of this part, with values at the ends of each field's type."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
+    from stbench import available_backends
+    from test_protocol_catalogue import _encoder_program
+
+    from linmot_st import toolchain
+    from linmot_st.plc import Plc
+
+    backends = available_backends()
+    if not backends:
+        pytest.skip("no ST backend")
+    plc = Plc(toolchain.build(str(_encoder_program(tmp_path)), backend=backends[0], root=tmp_path))
+    extremes = {"INT": (-32768, 32767), "UINT": (65535, 1), "DINT": (-2_000_000_000, 2_000_000_000),
+                "UDINT": (2_147_483_647, 7)}          # the encoder takes DINT inputs
+    for k, cid in enumerate(ROWS):
+        row = C.COMMANDS[cid]
+        for which in (0, 1):
+            fields = {f.name: extremes[f.type][which] for f in row.fields}
+            expected = C.encode(cid, k % 16, **fields)
+            plc["ENC.CID"], plc["ENC.COUNT"] = cid, k % 16
+            for name, value in zip("ABCD", list(fields.values()) + [0] * 4):
+                plc[f"ENC.{name}"] = value
+            plc.step(1)
+            assert plc["ENC.NBYTES"] == len(expected) - 2, f"{cid:03X}h"
+            assert bytes(plc["ENC.IMG"])[:len(expected)] == expected, f"{cid:03X}h"

@@ -23,10 +23,10 @@ from stbench import available_backends  # noqa: E402
 MS = 1_000_000
 MM = 10_000
 
-# 093xh, [MC] 4.3.76 (spec/linmot-motion-commands.md row 72): V16(target), from the actual position and velocity
-NEW_ROW = C.CommandDef(0x093, "VAI 16 Bit Go To Pos From Act Pos And Act Vel", C.COMMANDS[C.VAI16_GO_TO_POS].fields,
-                       C.Kind.VAI_16BIT, needs_homing=True, start=C.Start.ACTUAL, target=C.Target.ABSOLUTE,
-                       source="[MC] 4.3.76")
+# 0E0xh Sin VA Go To Pos ([MC] 4.3.130, spec/linmot-motion-commands.md 1b: target, vmax, acc), a command the
+# catalogue does not have; run here as a trapezoid of an existing kind (dec = acc), only to show the mechanism
+NEW_ROW = C.CommandDef(0x0E0, "Sin VA Go To Pos", C.COMMANDS[C.VAI_DEC_ACC_GO_TO_POS].fields, C.Kind.VAI_DEC_ACC,
+                       needs_homing=True, target=C.Target.ABSOLUTE, source="[MC] 4.3.130")
 
 
 def test_rows_are_consistent():
@@ -38,8 +38,8 @@ def test_rows_are_consistent():
         assert c.source.startswith(("[MC] 4.3.", "seed 004 4.3."))     # 004xh: in the seed only
     # system commands run in every state, motion only in Operation Enabled (seed 004 3.7)
     assert {cid for cid, c in C.COMMANDS.items() if c.states == C.IN_ANY_STATE} == {
-        C.NOP, C.WRITE_CONTROL_WORD, C.WRITE_LIVE_PARAMETER, C.WRITE_X4_OUTPUTS, C.WRITE_X6_OUTPUTS,
-        C.CLEAR_EVENT_EVALUATION}
+        C.NOP, C.WRITE_CONTROL_WORD, C.WRITE_LIVE_PARAMETER, C.SELECT_POSITION_CONTROLLER_SET, C.RESET,
+        C.WRITE_X4_OUTPUTS, C.WRITE_X6_OUTPUTS, C.CLEAR_EVENT_EVALUATION}
     assert C.COMMANDS[C.VAI_GO_TO_POS].transport is C.Transport.COMMAND_TABLE      # 16 bytes: only in a CT entry
     assert C.COMMANDS[C.VAI16_GO_TO_POS].transport is C.Transport.RXPDO3          # 8 bytes
     assert C.COMMANDS[C.PREDEF_VAI_GO_TO_POS].transport is C.Transport.RXPDO2     # 4 bytes
@@ -57,7 +57,7 @@ def test_the_python_codec_against_the_shared_vectors():
 
 
 def _homed_link() -> MotionLink:
-    d = E1100Drive(1, load_profile().with_defaults({0x1194: 2}), timings=DriveTimings.fast())
+    d = E1100Drive(1, load_profile().with_defaults({0x1194: 2, 0x2041: 2}), timings=DriveTimings.fast())
     link = MotionLink(d)
     link.enable()
     link.home()
@@ -65,13 +65,13 @@ def _homed_link() -> MotionLink:
     return link
 
 
-MOVE = dict(target=100, vmax=100, acc=10, dec=10)     # 16-bit scaling: 10 mm, 0.1 m/s, 1 m/s^2
+MOVE = dict(target=10 * MM, vmax=100_000, acc=100_000)     # 10 mm, 0.1 m/s, 1 m/s^2
 
 
-def test_without_its_row_the_drive_refuses_093h():
-    assert 0x093 not in C.COMMANDS
+def test_without_its_row_the_drive_refuses_0e0h():
+    assert 0x0E0 not in C.COMMANDS
     link = _homed_link()
-    link.command(0x093)                  # the header alone: the catalogue has no layout for it
+    link.command(0x0E0)                  # the header alone: the catalogue has no layout for it
     link.advance(10 * MS)
     assert link.drive.mc.state == W.ERROR and link.drive.mc.error_code == W.ERR_UNKNOWN_MOTION_CMD
 
@@ -81,10 +81,10 @@ def test_a_new_row_is_executed_by_the_emulated_drive(monkeypatch):
     link = _homed_link()
     mc = link.drive.mc
     t0 = link.t
-    link.command(0x093, **MOVE)
+    link.command(0x0E0, **MOVE)
     link.advance(400 * MS)               # a triangle: 2 sqrt(d / a) = 200 ms
     assert mc.state == W.OPERATION_ENABLED and mc.error_code == 0
-    assert [h >> 4 for t, h, _ in mc.executed if t >= t0] == [0x093]
+    assert [h >> 4 for t, h, _ in mc.executed if t >= t0] == [0x0E0]
     assert abs(mc.axis.position - 10 * MM) <= 1000 and mc.in_target
     moving = [s for s in mc.trajectory.between(t0) if s.status_word & W.SW_MOTION_ACTIVE]
     assert 150 * MS <= moving[-1].t_ns - moving[0].t_ns <= 250 * MS
@@ -129,9 +129,9 @@ def test_the_regenerated_st_encoder_encodes_a_new_row(monkeypatch, tmp_path, bac
     from linmot_st.plc import Plc
 
     monkeypatch.setitem(C.COMMANDS, NEW_ROW.cid, NEW_ROW)
-    assert "147, " not in (generate.REPO / "st_lib/motion/codec_gen.st").read_text()   # the library has no 093h
+    assert "224, " not in (generate.REPO / "st_lib/motion/codec_gen.st").read_text()   # the library has no 0E0h
     plc = Plc(toolchain.build(str(_encoder_program(tmp_path)), backend=backend, root=tmp_path))
-    cases = [(0x093, 5, dict(target=-1234, vmax=100, acc=10, dec=65535)),
+    cases = [(0x0E0, 5, dict(target=-1234, vmax=100, acc=2_000_000_000)),
              (C.VAI16_GO_TO_POS, 7, dict(target=32767, vmax=1, acc=2, dec=3)),
              (C.TIME_CURVE_OFFSET_TIME_AMP, 3, dict(curve_id=2, offset=-50000, curve_time=12345, amplitude=-1000))]
     for cid, count, fields in cases:

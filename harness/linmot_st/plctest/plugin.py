@@ -14,6 +14,7 @@ Markers
   needs_iec2c      skip where MatIEC's iec2c is missing;  needs_vcan(channel="vcan0"): skip without it
   drives(*node_ids, **Rig options)   the drives of the `rig` fixture
 Tests written in ST: files matching linmot_st_st_files (default test_*.st), see stunit.py.
+Coverage of the ST: --linmot-cov (cov_plugin.py, docs/coverage.md).
 docs/testing.md is the guide.
 """
 
@@ -27,7 +28,7 @@ import pytest
 
 from linmot_st.toolchain.backends import CHOICES
 
-from . import scope_plugin
+from . import cov_plugin, scope_plugin
 from .project import INI, Project, project_of
 from .stunit import StFile
 
@@ -50,6 +51,7 @@ def pytest_addoption(parser):
     for name, (text, default) in INI.items():
         parser.addini(name, f"{text} (default {default})", default="")
     scope_plugin.addoption(parser)
+    cov_plugin.addoption(parser, group)
 
 
 def pytest_configure(config):
@@ -57,6 +59,8 @@ def pytest_configure(config):
         config.addinivalue_line("markers", line)
     if not config.pluginmanager.has_plugin("linmot_st_scope"):
         config.pluginmanager.register(scope_plugin, "linmot_st_scope")
+    if not config.pluginmanager.has_plugin("linmot_st_cov"):
+        config.pluginmanager.register(cov_plugin, "linmot_st_cov")     # its pytest_configure runs (historic)
 
 
 # ---- markers -------------------------------------------------------------------------------------------

@@ -200,12 +200,19 @@ class Rig:
     def set_input(self, name: str, level: float, *, at_ms: float | None = None, node: int | None = None) -> None:
         """A drive input changes at at_ms (rig time; default now): a digital pin ("X4.6") to 0/1, or "X4.4" to
         volts."""
-        io = self.io(node)
-        t = self.bus.now if at_ms is None else round(at_ms * 1e6)
-        if name == "X4.4":
-            io.set_analog(level, max(t, io.clock()))
-        else:
-            io.set_input(name, int(level), max(t, io.clock()))
+        drive = self.drive if node is None else self.drives[node]
+        with drive.lock:                    # a drive served in real time runs in its own thread
+            if self.bus is None:            # RealTimeRig: the drive's own clock
+                if at_ms is not None:
+                    raise ValueError("in real time an input changes now: at_ms is for the simulated bus")
+                t = drive.clock_now_ns()
+            else:
+                t = self.bus.now if at_ms is None else round(at_ms * 1e6)
+            t = max(t, drive.io.clock())
+            if name == "X4.4":
+                drive.io.set_analog(level, t)
+            else:
+                drive.io.set_input(name, int(level), t)
 
     # -- variables ---------------------------------------------------------------------------------------
     def __getitem__(self, path: str) -> Any:

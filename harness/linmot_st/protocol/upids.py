@@ -22,6 +22,8 @@ P_LIMIT_POSITIVE, P_LIMIT_NEGATIVE = 0x146F, 0x146E                  # max / min
 P_LIMITS_ENABLE = 0x1602                                             # INVENTED
 P_CW_COPY_MASK, P_CW_FORCE_MASK, P_CW_FORCE_VALUES = 0x1700, 0x1701, 0x1702   # INVENTED
 P_RANGE1_UPID, P_RANGE1_MIN, P_RANGE1_MAX = 0x1780, 0x1781, 0x1782   # INVENTED (1710h is [MC] 7.2.2's fall delay)
+P_ACTIVE_CONTROLLER_SET = 0x1393                                     # [MC] 4.3.5 (005xh writes it)
+P_MAX_CURRENT_SET_A, P_MAX_CURRENT_SET_B = 0x13A6, 0x13BA            # [MC] 4.3.114..116, 7.2.1.2
 P_READY_TO_OPERATE_MODE = 0x6300                                     # [S004] 3.7, [MC] 3.7
 
 # the variables the MC publishes (read by SDO as UPID RAM values, mapped into TxPDOs)
@@ -31,6 +33,7 @@ V_STATUS_WORD, V_CONTROL_WORD, V_WARN_WORD, V_LOGGED_ERROR = 0x1D51, 0x1D52, 0x1
 V_DEMAND_POSITION, V_TARGET_POSITION, V_POSITION_DIFFERENCE = 0x1B8C, 0x1B90, 0x1B91   # INVENTED
 V_DEMAND_VELOCITY = 0x1BAE                                                     # INVENTED
 V_ACTUAL_VELOCITY = 0x1BAF                                                     # public CANFuck PDO note
+V_CT_VAR1, V_CT_VAR2 = 0x1E72, 0x1E73                                          # [MC] 4.3.124/125
 
 # the master encoder and the encoder cams ([MC] 5.5, 7.3; docs/emulator.md "Master encoder and cams")
 P_MASTER_ENCODER_SOURCE = 0x172A                                     # [MC] 7.3 (0 none, 1 X10, 2 X12)
@@ -47,6 +50,7 @@ V_MASTER_ENCODER_COUNTS, V_MASTER_ENCODER_SPEED = 0x1BA0, 0x1BA1     # INVENTED
 P_TRIGGER_MODE = 0x170C                                              # [MC] 7.2.2
 P_TRIG_RISE_INHIBIT, P_TRIG_FALL_INHIBIT = 0x170D, 0x170E            # [MC] 7.2.2.2
 P_TRIG_RISE_DELAY, P_TRIG_FALL_DELAY = 0x170F, 0x1710                # [MC] 7.2.2.3
+P_BRAKE_OPERATION_ENABLED = 0x1717                                  # [MC] 7.2.1.1 (X4.3 brake: status word bit 0)
 P_LIMIT_SWITCH_ERROR = 0x121B                                        # [MC] 7.2.3 (0 none, 1 power off, 2 quick stop)
 P_ANALOG_POS_MIN, P_ANALOG_POS_MAX = 0x14DC, 0x14DD                  # INVENTED (019xh: position at X4.4 min / max)
 P_TRIG_RISE_TARGET, P_TRIG_RISE_VMAX, P_TRIG_RISE_ACC, P_TRIG_RISE_DEC = 0x14F0, 0x14F1, 0x14F2, 0x14F3  # INVENTED

@@ -47,6 +47,11 @@ class InternalCompilerError(CompileError):
 
 
 TRACEBACK_ENV = "LINMOT_ST_TRACEBACK"
+# set (to the folder of the session's coverage data) by `pytest --linmot-cov`: builds default to coverage
+# builds, so that every PLC a test loads counts (docs/coverage.md)
+COVERAGE_ENV = "LINMOT_ST_COVERAGE"
+COVERAGE_RECORD = "coverage.json"     # in a coverage build's entry: where gcc put its objects (the .gcda paths)
+COVERAGE_FORMAT = "gcov-2"            # of the coverage builds (their flags and record): part of their cache key
 FAILED_KEPT = 5     # failed builds whose generated C is kept for reading (build/cache/failed-<key>)
 
 
@@ -62,6 +67,7 @@ class BuildResult:
     backend_version: str = ""
     warnings: list[str] = field(default_factory=list)
     c_dir: Path | None = None     # the generated C, kept for reading
+    coverage: bool = False        # compiled with gcc's coverage counters (docs/coverage.md)
 
 
 def choose_backend(backend: str = "auto") -> str:
@@ -78,11 +84,15 @@ def _code_digest(paths: list[Path]) -> str:
 
 def build(path: str | os.PathLike, backend: str = "auto", out: str | os.PathLike | None = None, *,
           cache_dir: str | os.PathLike | None = None, use_cache: bool = True,
-          root: str | os.PathLike | None = None) -> BuildResult:
+          root: str | os.PathLike | None = None, coverage: bool | None = None) -> BuildResult:
     """Build a .st file or a project folder (its plc.st) into a shared library and its manifest. `root`:
     the folder include paths resolve against (default: the nearest ancestor holding st_lib/linmot.st,
-    else the current directory); a root without st_lib/ gets the library tree on its include path."""
+    else the current directory); a root without st_lib/ gets the library tree on its include path.
+    `coverage`: with gcc's coverage counters, the C mapped to ST lines (default: whether $LINMOT_ST_COVERAGE
+    is set, as `pytest --linmot-cov` does)."""
     t0 = time.perf_counter()
+    if coverage is None:
+        coverage = bool(os.environ.get(COVERAGE_ENV))
     chosen = choose(backend)
     try:
         src = _sources.collect(path, root=root)
@@ -100,13 +110,16 @@ def build(path: str | os.PathLike, backend: str = "auto", out: str | os.PathLike
         compiler = cc.find_compiler()
     except cc.CCompileError as exc:
         raise CompileError([f"error: {exc}"], chosen.name) from None
+    # the keys of plain builds stay what they were; a coverage build's also name its record's format
+    extra_key = {"coverage": COVERAGE_FORMAT} if coverage else {}
     key = _cache.make_key({
+        **extra_key,
         "backend": chosen.name,
         "backend_version": backend_version,
         "generator": _code_digest(generator + [_TOOLCHAIN_DIR / "cc.py"]),
         "cc": compiler.version,
         "cflags": cc.BASE_FLAGS + cc.LINK_FLAGS + flags,
-        "glue": _code_digest(cc.GLUE_SOURCES),
+        "glue": _code_digest(cc.GLUE_SOURCES + ([cc.COVERAGE_GLUE] if coverage else [])),
         "entry": src.entry_rel,
         "root": str(src.root),
         "search": [str(p) for p in src.search],
@@ -117,11 +130,11 @@ def build(path: str | os.PathLike, backend: str = "auto", out: str | os.PathLike
     entry = store.lookup(key) if use_cache else None
     cached = entry is not None
     if entry is None:
-        entry = _compile(chosen, src, store, key, backend_version)
+        entry = _compile(chosen, src, store, key, backend_version, coverage)
     manifest = json.loads((entry / _cache.MANIFEST_NAME).read_text())
     result = BuildResult(entry / _cache.LIBRARY_NAME, entry / _cache.MANIFEST_NAME, chosen.name, cached, src.entry,
                          src.root, backend_version=backend_version, warnings=manifest.get("warnings", []),
-                         c_dir=entry / "c")
+                         c_dir=entry / "c", coverage=coverage)
     if out is not None:
         result = _export(result, Path(out))
     result.seconds = time.perf_counter() - t0
@@ -142,7 +155,7 @@ def _c_lines(units: list[Path]) -> int:
 
 
 def _compile(chosen: Backend, src: _sources.Sources, store: _cache.Cache, key: str,
-             backend_version: str) -> Path:
+             backend_version: str, coverage: bool = False) -> Path:
     staging = store.staging()
     t0 = time.perf_counter()
     started: list[cc.Started] = []
@@ -152,12 +165,24 @@ def _compile(chosen: Backend, src: _sources.Sources, store: _cache.Cache, key: s
         # the glue includes nothing generated: its gcc runs while the ST is translated
         started = cc.start(cc.GLUE_SOURCES, staging, cwd=src.root)
         try:
-            gen: Generated = chosen.generate(src, c_dir, backend_version)
+            gen: Generated = (chosen.generate(src, c_dir, backend_version, coverage=True) if coverage
+                              else chosen.generate(src, c_dir, backend_version))
         except Rejected as exc:
             raise CompileError(exc.diagnostics, chosen.name) from None
         except Exception as exc:
             raise _internal(exc, chosen.name, src) from exc
         manifest, all_units, one_program = gen.manifest, gen.units, gen.one_program
+        unit_flags, link_flags = gen.unit_flags, []
+        if coverage:
+            # the ST's units counted; the flush entry point compiled plain; the .gcno files stay in the
+            # entry, and the record names the folder gcc compiled in (the .gcda paths libgcov writes)
+            unit_flags = {u: gen.unit_flags.get(u, []) + cc.COVERAGE_FLAGS for u in all_units}
+            all_units = [*all_units, cc.COVERAGE_GLUE]
+            link_flags = cc.COVERAGE_LINK_FLAGS
+            # the ST files by absolute path: the C names an included file as its include path
+            (staging / COVERAGE_RECORD).write_text(json.dumps({
+                "objdir": str(staging), "backend": chosen.name, "root": str(src.root),
+                "sources": [str(Path(p).resolve()) for p in gen.sources_read]}))
         (staging / _cache.MANIFEST_NAME).write_text(json.dumps(manifest, indent=1))
         generated_s = time.perf_counter() - t0
         loud = generated_s > PROGRESS_AFTER_S
@@ -169,7 +194,8 @@ def _compile(chosen: Backend, src: _sources.Sources, store: _cache.Cache, key: s
                            + (f" (-O0 for the large {', '.join(slow)})" if slow else "") + " ...")
         try:
             cc.compile_shared(all_units, staging / _cache.LIBRARY_NAME, include_dirs=gen.include_dirs,
-                              unit_flags=gen.unit_flags, cwd=src.root, one_program=one_program, started=started)
+                              unit_flags=unit_flags, cwd=src.root, one_program=one_program, started=started,
+                              link_flags=link_flags)
         except cc.CCompileError as exc:
             kept = _keep_failed(store, key, staging)
             text = str(exc)

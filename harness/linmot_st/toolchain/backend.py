@@ -56,8 +56,10 @@ class Backend(Protocol):
     def flags(self) -> list[str]:
         """The flags that shape the output (the compiler's own and the C units'): they key the cache."""
 
-    def generate(self, src: Sources, c_dir: Path, version: str) -> Generated:
-        """The C (and manifest) of `src` in `c_dir`; raises Rejected on sources the compiler refuses."""
+    def generate(self, src: Sources, c_dir: Path, version: str, coverage: bool = False) -> Generated:
+        """The C (and manifest) of `src` in `c_dir`; raises Rejected on sources the compiler refuses.
+        `coverage`: a coverage build (docs/coverage.md), whose C must map to ST lines with `#line`; the
+        driver passes it only when true."""
 
     def explain_c_errors(self, diagnostics: list[str]) -> list[str]:
         """The C compiler's diagnostics on this backend's C, with notes on known causes added."""

@@ -20,6 +20,12 @@ from pathlib import Path
 
 GLUE_DIR = Path(__file__).parent / "glue"
 GLUE_SOURCES = [GLUE_DIR / "plc_glue.c"]
+COVERAGE_GLUE = GLUE_DIR / "plc_coverage.c"      # coverage builds: flushes libgcov's counters on request
+
+# Coverage builds (docs/coverage.md): gcc's own arc counters (gcov). -O0: at -O1 gcc moves and merges the
+# code of neighbouring statements, and gcov's counts per (ST) line stop matching what the ST ran.
+COVERAGE_FLAGS = ["--coverage", "-O0"]
+COVERAGE_LINK_FLAGS = ["--coverage"]
 
 # -g: the line table lets a fault's address be mapped back to its POU and ST line
 BASE_FLAGS = ["-O1", "-g1", "-fPIC", "-Wno-unused-function", "-fno-strict-aliasing"]
@@ -190,7 +196,7 @@ def start(units: list[Path], objdir: Path, *, cwd: Path | None = None, extra_fla
 def compile_shared(units: list[Path], output: Path, *, include_dirs: list[Path] = (),
                    unit_flags: dict[Path, list[str]] | None = None, cwd: Path | None = None,
                    extra_flags: list[str] = (), one_program: list[Path] = (),
-                   started: list[Started] = ()) -> None:
+                   started: list[Started] = (), link_flags: list[str] = ()) -> None:
     """Compile each unit (with its own extra flags) and link them into `output`, with the objects of the
     `started` compiles. `one_program`: units cut from one program, sized together (size_flags)."""
     cc = shlex.split(find_compiler().path)
@@ -213,7 +219,7 @@ def compile_shared(units: list[Path], output: Path, *, include_dirs: list[Path] 
     if failed:
         raise _error(failed)
     link = [*cc, *BASE_FLAGS, *extra_flags, *[str(obj) for (_, obj, _), _ in results], "-o", str(output),
-            *LINK_FLAGS]
+            *link_flags, *LINK_FLAGS]
     proc = subprocess.run(link, capture_output=True, text=True, cwd=cwd, check=False)
     if proc.returncode != 0:
         raise _error([((None, None, link), proc)])

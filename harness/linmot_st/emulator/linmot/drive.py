@@ -27,6 +27,7 @@ from .manufacturer import ManufacturerObjects
 from ..cia301.sdo import Reply
 from ..motion import MotionControl, MotionSettings
 from ...protocol.words import ERROR, SETUP_ERROR
+from ...protocol.upids import P_BRAKE_OPERATION_ENABLED
 from .options import ProtocolOptions
 from .params import ParameterStore
 from .model import E1100, DriveModel
@@ -114,6 +115,7 @@ class E1100Drive(NmtSlave):
         self.mc = MotionControl(self.motion, self.timings.hw_test_ns, self.params, self.curves, self.ct,
                                 self._log_error)
         self.params.live = self.mc.variable
+        self.mc.on_reset = lambda t: self._at(t, self._start_boot)     # 00Fxh: the whole firmware restarts
         self.io = DriveIO(io, par=self.mc.par)
         self._wire_io()
         self.pdo = ProcessData(self)
@@ -235,7 +237,11 @@ class E1100Drive(NmtSlave):
         io.before_change = mc.sync
         io.on_trigger = mc.events.on_trigger
         io.on_capture = lambda t: int(round(mc.axis.position))
+        io.on_analog = lambda volts, t: mc.events.on_analog(t)
         io.on_level = mc.events.on_limit_switch if io.s.limit_switches else (lambda pin, level, t: None)
+        # [MC] 7.2.1.1: with brake mode 1717h the brake is released (X4.3 = 24 V) while status word bit 0
+        # (Operation Enabled) is set; the other brake modes (1716h, 1718h, delays) are not modelled
+        io.brake = lambda: (mc.status_word & 1) if mc.par(P_BRAKE_OPERATION_ENABLED) else None
         mc.io = io
 
     # ------------------------------------------------------------------ inspection

@@ -10,12 +10,13 @@ outputs ([MC] 7.2; seed 004 7.2). Sans-I/O like the drive: a level changes at a 
 Pins ([MC] 7.2 table): X4.3 brake / output, X4.4 analog in, X4.5 capture input, X4.6 trigger input, X4.7 home
 switch, X4.8 limit switch IN (negative), X4.9 limit switch OUT (positive), X4.10/X4.11 PTC, X4.12 SVE. Outputs
 X4.3..X4.11 are written by 003xh (bit 0 = X4.3, [MC] 4.3.4); X6.0..X6.15 by 004xh (seed 004 TOC; layout
-INFERRED as 003xh's).
+INFERRED as 003xh's). X6.0..X6.15 are also inputs (the IF commands compare "X6 inputs"; 16 bits INFERRED).
 
 The trigger input is conditioned as [MC] 7.2.2 says (mode 170Ch: none, direct, inhibited 170Dh/170Eh,
 delayed 170Fh/1710h, inhibited & delayed); the conditioned edges ("trigger out") go to the listeners (the MC's
 event handler). A rising edge on X4.5 captures the actual position (variable 1E62h; INFERRED edge).
-Every level change is recorded in `changes` (and the MC's trajectory record, trajectory.io).
+Every level change is recorded in `changes`: on a drive, the MC's trajectory record (`trajectory.io`,
+`trajectory.io_at(name, t_ns)`).
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ from ...protocol.upids import (
 X4_INPUTS = tuple(f"X4.{n}" for n in range(3, 13))       # any X4 pin can be read (general purpose IO)
 X4_OUTPUTS = tuple(f"X4.{n}" for n in range(3, 12))      # 003xh: bit 0 = X4.3 .. bit 8 = X4.11
 X6_OUTPUTS = tuple(f"X6.{n}" for n in range(16))         # 004xh: bit n = X6.n (INFERRED)
+X6_INPUTS = X6_OUTPUTS                                   # the X6 inputs the IF commands read (INFERRED: 16 bits)
 TRIGGER, CAPTURE, ANALOG = "X4.6", "X4.5", "X4.4"
 LIMIT_IN, LIMIT_OUT = "X4.8", "X4.9"
 
@@ -68,7 +70,7 @@ class DriveIO:
     def __init__(self, settings: IoSettings | None = None, par: Callable[[int, int], int] | None = None):
         self.s = settings or IoSettings()
         self.par = par or (lambda upid, default=0: default)
-        self.levels: dict[str, int] = {n: 0 for n in X4_INPUTS}
+        self.levels: dict[str, int] = {n: 0 for n in X4_INPUTS + X6_INPUTS}
         self.out_x4 = 0                  # output bits, bit 0 = X4.3
         self.out_x6 = 0
         self.analog_v = 0.0
@@ -80,6 +82,9 @@ class DriveIO:
         self.on_trigger: Callable[[bool, int], None] = lambda rising, t: None
         self.on_capture: Callable[[int], int | None] = lambda t: None
         self.on_level: Callable[[str, int, int], None] = lambda name, level, t: None
+        self.on_analog: Callable[[float, int], None] = lambda volts, t: None
+        # X4.3 as brake output ([MC] 7.2.1.1, 1717h): its level from the MC, None when X4.3 is no brake
+        self.brake: Callable[[], int | None] = lambda: None
         self.captured_position = 0
         self._inhibit_until = -1         # [MC] 7.2.2.2: further edges ignored until then
         self._inhibit_level = 0          # the inhibited signal
@@ -91,7 +96,7 @@ class DriveIO:
     # ------------------------------------------------------------------ reading
     def input(self, name: str) -> int:
         """The level (0/1) of a digital input now (as of the last event the drive processed)."""
-        return self.levels[_pin(name, X4_INPUTS)]
+        return self.levels[_pin(name, X4_INPUTS + X6_INPUTS)]
 
     def analog(self) -> float:
         """The voltage on X4.4."""
@@ -105,30 +110,28 @@ class DriveIO:
     def output(self, name: str) -> int:
         if name in X6_OUTPUTS:
             return self.out_x6 >> X6_OUTPUTS.index(name) & 1
-        return self.out_x4 >> X4_OUTPUTS.index(_pin(name, X4_OUTPUTS)) & 1
+        return self.outputs("X4") >> X4_OUTPUTS.index(_pin(name, X4_OUTPUTS)) & 1
 
     def outputs(self, connector: str = "X4") -> int:
-        """The output word of a connector: X4 (bit 0 = X4.3) or X6 (bit n = X6.n)."""
-        return {"X4": self.out_x4, "X6": self.out_x6}[connector]
+        """The output word of a connector: X4 (bit 0 = X4.3) or X6 (bit n = X6.n). X4.3 configured as brake
+        output follows the MC (1 = 24 V, released), not 003xh."""
+        if connector == "X6":
+            return self.out_x6
+        if connector != "X4":
+            raise KeyError(connector)
+        brake = self.brake()
+        return self.out_x4 if brake is None else (self.out_x4 & ~1) | brake
 
-    def input_word(self) -> int:
-        """The X4 input levels as a word, bit 0 = X4.3 (the same bit numbering as the outputs)."""
-        return sum(self.levels[n] << i for i, n in enumerate(X4_INPUTS))
-
-    def level_at(self, name: str, t_ns: int) -> float | None:
-        """The value of a pin (or 'trigger', or 'X4.4' volts) at t_ns from the record of changes."""
-        found = None
-        for c in self.changes:
-            if c.t_ns > t_ns:
-                break
-            if c.name == name:
-                found = c.value
-        return found
+    def input_word(self, connector: str = "X4") -> int:
+        """The input levels of a connector as a word: X4 bit 0 = X4.3 (the outputs' numbering), X6 bit n = X6.n
+        (what the command table's masked IF commands compare)."""
+        pins = {"X4": X4_INPUTS, "X6": X6_INPUTS}[connector]
+        return sum(self.levels[n] << i for i, n in enumerate(pins))
 
     # ------------------------------------------------------------------ writing (tests, rig, CLI)
     def set_input(self, name: str, level: int, t_ns: int | None = None) -> None:
         """A digital input changes to `level` at t_ns (default: now); a time in the future is scheduled."""
-        pin = _pin(name, X4_INPUTS)
+        pin = _pin(name, X4_INPUTS + X6_INPUTS)
         if pin == ANALOG:
             raise ValueError("X4.4 is the analog input: use set_analog(volts, t_ns)")
         self._schedule(t_ns, lambda t: self._apply(pin, 1 if level else 0, t))
@@ -214,6 +217,7 @@ class DriveIO:
         self.before_change(t)
         self.analog_v = volts
         self._record(t, ANALOG, volts)
+        self.on_analog(volts, t)
 
     def _time(self, upid: int) -> int:
         return self.par(upid, 0) * self.s.trigger_time_unit_ns

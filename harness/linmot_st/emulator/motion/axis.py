@@ -49,6 +49,7 @@ class Axis:
         self.velocity = 0.0                                 # pu/s
         self.acceleration = 0.0
         self.blocked = False
+        self.current_limit_ma: float | None = None          # the power stage's current limit (None: unlimited)
 
     # ---- the drive's frame ----
     @property
@@ -88,6 +89,14 @@ class Axis:
             self._move_to(physical, vd1 - ed1)
             return
         v1 = vd1 - ed1                      # the common case, _move_to inlined (the hottest loop of the model)
+        if self.current_limit_ma is not None:
+            # the current limit bounds the force, so the acceleration (the fast path is off while it is set)
+            a_max = self.current_limit_ma * 1e-3 * s.force_constant_n_per_a / s.moving_mass_kg * 1e7
+            a = (v1 - self.velocity) / self.h
+            if abs(a) > a_max:
+                v1 = self.velocity + (a_max if a > 0 else -a_max) * self.h
+                self._move_to(self.physical + (self.velocity + v1) * self.h / 2, v1)
+                return
         self.acceleration = (v1 - self.velocity) / self.h
         self.physical, self.velocity = physical, v1
 

@@ -30,6 +30,7 @@ from . import triggered  # noqa: F401 (registers the I/O and triggered commands'
 from .fast_path import FastPath
 from .interpreter import Interpreter
 from ..linmot.master_encoder import MasterEncoder
+from .pending import PendingMotions
 from .settings import MotionSettings
 from .setpoints import Hold
 from .state_machine import StateMachine
@@ -51,6 +52,8 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
         self.executed: list[tuple[int, int, bytes]] = []   # (t_ns, header, parameters) of every command run
         self.ct_runner = CtRunner(self)
         self.encoder = MasterEncoder(self.par, self.sync)      # the master encoder input ([MC] 7.3)
+        self.pending = PendingMotions()           # the queued motion and position transition (pending.py)
+        self.on_reset: Callable[[int], None] | None = None   # 00Fxh: the drive restarts (set by the drive)
         self.events = EventHandler(self)
         self.io = None                      # the drive's I/O (emulator/linmot/io.py), set by the drive
         self.running = False
@@ -90,6 +93,9 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
         self._prev_vd = 0.0
         self._now = getattr(self, "_now", 0)
         self.ct_runner.stop()
+        self.pending.clear()
+        self.current_limited = False             # a With Max Curr command ran: the axis limits its current
+        self.axis.current_limit_ma = None
         self.events.clear()
 
     # ------------------------------------------------------------------ parameters
@@ -105,6 +111,7 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
         self._now = t
         self.running = True
         self._reset_state()
+        self.ct_runner.clear_variables()          # RAM of the MC: 0 at every MC start (INFERRED)
         self.axis.forget_reference()
         self.gen = Hold(self.axis.position)
         self.dem_p = self.axis.position
@@ -163,7 +170,8 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
                 self._fail(W.ERR_MOTION_CMD_WRONG_STATE, t)     # seed 004 3.7: error, state 4
                 self._record(t)
             return      # INFERRED: in states 0..5 (and 14) a new count is taken but not executed
-        self.ct_runner.stop()   # a command from the interface ends a running command-table sequence
+        if self.s.interface_command_ends_sequence:
+            self.ct_runner.stop()   # a command from the interface ends a running command-table sequence
         self.execute(header, params, t)
         self._record(t)
 
@@ -261,6 +269,8 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
             self._prev_vd = 0.0
         self.dem_p, self.dem_v = p, v
         self._last_tick = t
+        if self.pending.armed:
+            self.pending.step(self, t)
         if self.running:
             if self.controlled:
                 self._monitor(t)
@@ -278,7 +288,7 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
                     self._power_off(t, W.SWITCH_ON_DISABLED)
         # keep cycling while anything can still change
         self._update_in_target(t)
-        busy = (not self.gen.done(t) or self.ct_runner.running or axis.blocked or self.events.pending
+        busy = (not self.gen.done(t) or self.ct_runner.running or axis.blocked or self.pending.armed or self.events.pending
                 or (self.state in W.SPECIAL_STATES and self.sub != W.SUB_FINISHED)
                 or (self._in_window_since is not None and not self.in_target))
         if self.controlled:

@@ -1,21 +1,26 @@
-"""Command-table execution ([MC] chapter 6, 4.3.163..170; seed 000 6.1): Start Command Table Command (200xh)
-runs an entry's motion command and follows its links (entry bytes 02h..03h, FFFFh = end).
+"""Command-table execution ([MC] chapter 6, 4.3.163..211; seed 000 6.1): Start Command Table Command (200xh)
+runs an entry's motion command and follows its links (entry bytes 02h..03h, FFFFh = end); an IF continues at
+one of its two entries, a wait holds the sequence until its condition holds (ct_language.py has the conditions
+and the two command-table variables).
 
-INFERRED (docs/emulator.md section 13): one entry per MC cycle, the first at once; the waits 210xh (time,
-100 us), 211xh (motion finished) and 212xh (in target position) hold the sequence; 200xh inside the table
-jumps; an entry's own count nibble is ignored; a command from the interface, an error, abort, freeze or
-leaving state 8 ends the sequence; a missing entry raises 008Ah.
+INFERRED (docs/emulator.md section 13.6): one entry per MC cycle, the first at once; a wait's condition is
+checked from the next cycle on, and the entry after it runs in the cycle it holds; 200xh inside the table jumps;
+an IF ignores the entry's link; an entry's own count nibble is ignored; a command from the interface, an error,
+abort, freeze or leaving state 8 ends the sequence; a missing entry raises 008Ah. The variables keep their values
+when a sequence ends; an MC start clears them.
 """
 
 from __future__ import annotations
 
 import struct
+from typing import Callable
 
 from ...protocol import commands as C
 from ...protocol import words as W
+from ...protocol.commands import Kind
+from .ct_language import WAITS, if_target
 
 END = 0xFFFF
-_TRIGGER_WAITS = (C.WAIT_RISING_TRIGGER, C.WAIT_FALLING_TRIGGER)
 
 
 class CtRunner:
@@ -24,7 +29,12 @@ class CtRunner:
         self.running = False
         self.entry: int | None = None       # the entry to run next
         self.executed: list[int] = []       # entries run by the present sequence, in order (tests, reports)
-        self._wait: tuple | None = None
+        self.variables = {1: 0, 2: 0}       # Cmd Table Var 1 / Var 2 (UPIDs 1E72h / 1E73h), SInt32
+        self._wait: Callable[[int], bool] | None = None
+        self._link = END
+
+    def clear_variables(self) -> None:
+        self.variables[1] = self.variables[2] = 0
 
     def stop(self) -> None:
         self.running = False
@@ -36,21 +46,14 @@ class CtRunner:
             return self.mc._fail(W.ERR_CMD_TAB_ENTRY_NOT_DEFINED, t)
         self.running, self.entry, self._wait = True, entry, None
         self.executed = []
+        self.mc._wake(t)            # the MC cycles while the sequence runs, even if its first entry moves nothing
         self.step(t)
         return True
 
     def step(self, t: int) -> None:
         """Run the sequence at t: finish a wait if its condition holds, then run at most one entry."""
         if self._wait is not None:
-            kind, until = self._wait
-            mc = self.mc
-            if kind == C.WAIT_TIME and t < until:
-                return
-            if kind == C.WAIT_MOTION_FINISHED and not mc.gen.done(t):
-                return
-            if kind == C.WAIT_IN_TARGET_POSITION and not mc.in_target:
-                return
-            if kind in _TRIGGER_WAITS and not mc.events.edge_since(kind == C.WAIT_RISING_TRIGGER, until):
+            if not self._wait(t):
                 return
             self._wait = None
             self._advance(self._link)
@@ -69,13 +72,19 @@ class CtRunner:
         if cid == C.START_COMMAND_TABLE:
             self._advance(struct.unpack_from("<H", params, 0)[0])
             return
-        if cid in (C.WAIT_TIME, C.WAIT_MOTION_FINISHED, C.WAIT_IN_TARGET_POSITION) or cid in _TRIGGER_WAITS:
-            # Wait Time: until then; a trigger wait: the next edge at or after now (213xh/214xh, [MC] 4.3.171/172)
-            until = t + struct.unpack_from("<I", params, 0)[0] * 100_000 if cid == C.WAIT_TIME else t
-            self._wait = (cid, until)
+        row, fields = C.decode(header, params)
+        if cid in WAITS:
+            self.mc.executed.append((t, header, bytes(params[:16])))
+            self._wait = WAITS[cid](self.mc, fields, t)
             self.entry = None
             self.mc._wake(t)            # the wait is checked every cycle (also when it is the first entry)
             return
+        if row is not None and row.kind is Kind.CT_IF:
+            target = if_target(self.mc, cid, fields)
+            if target is not None:
+                self.mc.executed.append((t, header, bytes(params[:16])))
+                self._advance(target)
+                return
         if not self.mc.execute(header, params, t, from_table=True):
             self.stop()
             return

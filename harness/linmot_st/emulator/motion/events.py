@@ -33,6 +33,7 @@ class EventHandler:
         self.pending: list[tuple[bool, int]] = []         # edges not yet seen by an MC cycle: (rising, t)
         self.last_edge: dict[bool, int] = {}              # rising -> time of the last edge
         self.fired: list[int] = []                        # times the armed action ran (tests, reports)
+        self.follow: Callable[[int], None] | None = None  # 019xh following X4.4 (MotionSettings)
 
     @property
     def active(self) -> bool:
@@ -44,6 +45,11 @@ class EventHandler:
     def clear(self) -> None:
         self.armed = None
         self.pending.clear()
+        self.follow = None
+
+    def on_analog(self, t: int) -> None:
+        if self.follow is not None:
+            self.follow(t)
 
     def edge_since(self, rising: bool, t: int) -> bool:
         """An edge of this direction at or after t (command-table waits)."""

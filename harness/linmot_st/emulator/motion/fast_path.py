@@ -33,7 +33,8 @@ class FastPath:
 
     def _plain(self) -> bool:
         return (self.running and self.controlled and self.state in _PLAIN_STATES and self.after_stop is None
-                and not self.ct_runner.running and not self.events.pending and not self.axis.blocked and not self.par(P_RANGE1_UPID)
+                and not self.ct_runner.running and not self.events.pending and not self.axis.blocked
+                and not self.par(P_RANGE1_UPID) and not self.pending.armed and self.axis.current_limit_ma is None
                 and self._next_tick is not None and self.s.quiet_cycles)
 
     def _quiet_run(self, t_limit: int, entries: list | None = None, samples: list | None = None) -> bool:

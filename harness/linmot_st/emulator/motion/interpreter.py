@@ -18,6 +18,8 @@ from ...protocol.upids import (
     P_CURVE_AMPLITUDE, P_CURVE_OFFSET, P_CURVE_TIME_SCALE, P_HOME_POSITION, P_PREDEF_ACC, P_PREDEF_DEC,
     P_PREDEF_VMAX, P_QUICK_STOP_DEC, P_SCALE_ACC, P_SCALE_POS, P_SCALE_VEL,
 )
+from . import vai_variants as VV
+from . import ct_language
 from .setpoints import CurvePlan, StopPlan, VaPlan
 from .units import ACC_RAW, VEL_RAW
 
@@ -99,25 +101,37 @@ def _vai_values(mc, c: CommandDef, f: dict) -> tuple[float, float, float, float]
                 f["acc"] * acc16, f["dec"] * acc16)
     if c.kind is Kind.PREDEF_VAI:
         return (f["target"], *mc._predef())
+    if c.kind in VV.UNITS:
+        return VV.UNITS[c.kind](mc, f)
     return f["target"], f["vmax"] * VEL_RAW, f["acc"] * ACC_RAW, f["dec"] * ACC_RAW
 
 
 def _stop_deceleration(mc, c: CommandDef, f: dict) -> float:
     if c.kind is Kind.VAI_16BIT:
         return f["dec"] * mc._acc16()
-    if c.kind is Kind.PREDEF_VAI:
+    if c.kind in VV.QUICK_STOP_KINDS:
         return mc.par(P_QUICK_STOP_DEC, 5_000_000) * ACC_RAW      # the quick-stop deceleration
     return f["dec"] * ACC_RAW
 
 
 def _vai(mc, c: CommandDef, f: dict, t: int) -> bool:
-    """VAI, VAI 16 bit, predefined VAI: the row's start and target say where the motion starts and what the
-    position field means."""
+    """Every VAI family: the row's start and target say where the motion starts and what the position field
+    means (vai_variants.py: the families' units, infinite motion, transitions, the queue, max current)."""
     p, v, _ = mc.gen.at(t)
     if c.target is Target.STOP:
         mc._start(StopPlan(t, p, v, _stop_deceleration(mc, c, f)))
+        if mc.s.stop_drops_pending:
+            mc.pending.clear()
+        return True
+    if VV.no_position(mc, c, f, t, _vai_values):
         return True
     pos, vmax, acc, dec = _vai_values(mc, c, f)
+    if c.start is Start.AFTER_ACTUAL_COMMAND:
+        mc.pending.queue(pos, vmax, acc, dec)
+        mc._wake(t)
+        return True
+    if "max_current" in f:
+        VV.set_max_current(mc, f["max_current"])
     if c.start is Start.ACTUAL:
         p, v = mc.axis.position, mc.axis.velocity
     elif c.start is Start.ACTUAL_AT_REST:
@@ -176,6 +190,16 @@ HANDLERS: dict[Kind, Handler] = {
     Kind.VAI_16BIT: _vai,
     Kind.PREDEF_VAI: _vai,
     Kind.TIME_CURVE: _time_curve,
+    Kind.PREDEF_VAI_16BIT: _vai,
+    Kind.VAI_PREDEF_ACC: _vai,
+    Kind.VAI_DEC_ACC: _vai,
+    Kind.VAI_16BIT_DEC_ACC: _vai,
+    Kind.SELECT_CONTROLLER_SET: VV.select_controller_set,
+    Kind.RESET: VV.reset,
+    Kind.CT_MODIFY: ct_language.modify_entry,
+    Kind.CT_VARIABLE: ct_language.variable,
+    Kind.CT_IF: ct_language.if_jump,
+    Kind.VAI_CT_VAR: ct_language.vai_to_variable,
 }
 
 # the kinds of their own modules (one line each)

@@ -42,9 +42,21 @@ class MotionSettings:
     # homed, else error 0080h ([MC] 10: "action that requires the motor to be already homed")
     motion_requires_homing: bool = True
 
+    # a VAI stop (017xh, 027xh, 097xh, 0A7xh) also drops a queued "After Actual Command" move and an armed
+    # position transition; False: only 008xh and leaving Operation Enabled do, and a move queued before the stop
+    # starts when the stop ramp ends ([MC] 4.3.134/144's mechanism taken literally; docs/emulator.md 13.3.1)
+    stop_drops_pending: bool = False
+    # a motion command from the interface while a command-table sequence runs: ends the sequence (True), or runs
+    # and lets the sequence go on (False); no source says which (docs/emulator.md 13.6)
+    interface_command_ends_sequence: bool = True
+
     # demand current (1B93h, mA) = moving mass x actual acceleration / force constant
     moving_mass_kg: float = 0.5
     force_constant_n_per_a: float = 10.0
+
+    # VAI Go To Analog Pos (019xh): False = the target is the analog input's position when the command runs;
+    # True = it follows X4.4 until another motion replaces it ([MC] 4.3.18 does not say which)
+    analog_target_follows: bool = False
 
     # the trajectory record (drive.mc.trajectory): one sample per MC cycle and per event
     record_trajectory: bool = True

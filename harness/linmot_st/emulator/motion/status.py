@@ -12,6 +12,7 @@ from ...protocol.upids import (
     P_SCALE_POS, P_RANGE1_UPID, P_RANGE1_MIN, P_RANGE1_MAX, V_STATE_VAR, V_ACTUAL_POSITION, V_DEMAND_CURRENT,
     V_DEMAND_POSITION_16, V_ACTUAL_POSITION_16, V_STATUS_WORD, V_CONTROL_WORD, V_WARN_WORD, V_LOGGED_ERROR,
     V_DEMAND_POSITION, V_TARGET_POSITION, V_POSITION_DIFFERENCE, V_DEMAND_VELOCITY, V_ACTUAL_VELOCITY,
+    V_CT_VAR1, V_CT_VAR2,
     V_CAPTURED_POSITION, V_X4_INPUTS, V_X4_OUTPUTS, V_X6_OUTPUTS, V_ANALOG_X4_4,
 )
 from .encoder_cams import sync_variable
@@ -80,6 +81,8 @@ class StatusWords:
             bits |= W.SW_EVENT_HANDLER
         if s in W.SPECIAL_STATES and self.sub != W.SUB_FINISHED:
             bits |= W.SW_SPECIAL_MOTION
+        if self.pending.armed:
+            bits |= W.SW_EVENT_HANDLER
         if self.in_target:
             bits |= W.SW_IN_TARGET
         if self.homed:
@@ -116,7 +119,7 @@ class StatusWords:
                 low |= W.SV_IN_TARGET
             if self.homed:
                 low |= W.SV_HOMED
-            if self.events.armed is not None:
+            if self.pending.armed or self.events.armed is not None:
                 low |= W.SV_EVENT_HANDLER
         elif s in W.SPECIAL_STATES:
             low = self.sub
@@ -175,6 +178,8 @@ class StatusWords:
             return int(round(self.gen.target))
         if upid == V_POSITION_DIFFERENCE:
             return int(round(self.dem_p - self.axis.position))
+        if upid in (V_CT_VAR1, V_CT_VAR2):
+            return self.ct_runner.variables[1 if upid == V_CT_VAR1 else 2]
         io = self.io
         if io is not None:
             if upid == V_CAPTURED_POSITION:

@@ -6,6 +6,7 @@ registered into the interpreter's HANDLERS table. The plain motions they start a
 from __future__ import annotations
 
 from ...protocol import commands as C
+from ...protocol import words as W
 from ...protocol.commands import CommandDef, Kind, Start, Target
 from ...protocol.commands.triggered import TRIGGERED, Units
 from ...protocol.upids import (
@@ -24,7 +25,10 @@ def _io_outputs(mc, c: CommandDef, f: dict, t: int) -> bool:
 
 
 def _clear_events(mc, c: CommandDef, f: dict, t: int) -> bool:
+    """008xh: the event handler forgets what is armed; INFERRED: also the queued "after actual command" move and
+    the armed position transition (pending.py), which show as the same event-handler bit."""
     mc.events.clear()
+    mc.pending.clear()
     return True
 
 
@@ -91,7 +95,25 @@ def analog_position(mc) -> float:
 
 
 def _vai_analog(mc, c: CommandDef, f: dict, t: int) -> bool:
-    return _start_vai(mc, c, t, analog_position(mc), f["vmax"] * VEL_RAW, f["acc"] * ACC_RAW, f["dec"] * ACC_RAW)
+    """019xh; with MotionSettings.analog_target_follows each change of X4.4 re-targets the motion (from the
+    demand position and velocity, like a new VAI command) until another motion replaces it."""
+    limits = f["vmax"] * VEL_RAW, f["acc"] * ACC_RAW, f["dec"] * ACC_RAW
+    _start_vai(mc, c, t, analog_position(mc), *limits)
+    mc.events.follow = None
+    if mc.s.analog_target_follows:
+        plan = [mc.gen]
+
+        def follow(te: int) -> None:
+            if mc.gen is not plan[0] or mc.state != W.OPERATION_ENABLED:
+                mc.events.follow = None             # another motion, a stop or an error ended it
+                return
+            target = analog_position(mc)
+            if target != mc.gen.target:
+                _start_vai(mc, c, te, target, *limits)
+                plan[0] = mc.gen
+                mc._record(te)
+        mc.events.follow = follow
+    return True
 
 
 _TRIG_CONFIG = {C.VAI_START_TRIG_RISE_CONFIG: (P_TRIG_RISE_TARGET, P_TRIG_RISE_VMAX, P_TRIG_RISE_ACC, P_TRIG_RISE_DEC),

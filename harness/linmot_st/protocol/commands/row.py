@@ -30,6 +30,16 @@ class Kind(enum.Enum):
     WAIT = "command-table wait (acts only inside a command-table sequence)"
     ENCODER_CAM = "encoder cam: define, enable/disable, go to sync position, set the counter"
     TRIGGERED_CAM = "encoder cam armed on a trigger edge with delay counts"
+    PREDEF_VAI_16BIT = "predefined VAI 16 bit: target in the 16-bit scaling, vmax/acc/dec from parameters"
+    VAI_PREDEF_ACC = "VAI predef acc: target and vmax in the command, acc/dec from the predefined parameters"
+    VAI_DEC_ACC = "VAI dec=acc: target, vmax and one value for acc and dec (and a max current) in the command"
+    VAI_16BIT_DEC_ACC = "VAI 16 bit dec=acc: target, vmax, acc=dec in the 16-bit interface scaling"
+    SELECT_CONTROLLER_SET = "select the active position-controller set (A/B)"
+    RESET = "restart the drive's firmware"
+    CT_MODIFY = "modify a parameter of a command-table entry in RAM"
+    CT_VARIABLE = "set, add to, store or load a command-table variable"
+    CT_IF = "command-table IF: a two-way jump on a condition"
+    VAI_CT_VAR = "VAI to the position held in a command-table variable"
     IO_OUTPUTS = "write interface outputs with a mask"
     CLEAR_EVENTS = "clear the event handler"
     ON_TRIGGER = "armed in the event handler, run on every trigger edge until 008xh"
@@ -43,6 +53,7 @@ class Start(enum.Enum):
     DEMAND = "demand position and velocity"
     ACTUAL = "actual position and velocity"
     ACTUAL_AT_REST = "actual position, demand velocity 0"
+    AFTER_ACTUAL_COMMAND = "queued: from the demand position once the running motion has ended (one shot)"
 
 
 class Target(enum.Enum):
@@ -52,6 +63,10 @@ class Target(enum.Enum):
     FROM_START = "an increment on the start position"
     FROM_LAST_TARGET = "an increment on the last target"
     STOP = "no target: decelerate to standstill"
+    INFINITE_POSITIVE = "no target: to vmax in the positive direction, on until stopped"
+    INFINITE_NEGATIVE = "no target: to vmax in the negative direction, on until stopped"
+    TRANSITION_POSITIVE = "no target: the running VAI takes the new vmax/acc/dec where the demand passes it upwards"
+    TRANSITION_NEGATIVE = "no target: the running VAI takes the new vmax/acc/dec where the demand passes it downwards"
     NONE = "no position"
 
 

@@ -60,21 +60,23 @@ def backend_version() -> str:
     return "builtin-" + h.hexdigest()[:12]
 
 
-def compile_to_c(entry_file: Path, include_root: Path, out_dir: Path, search: list[Path] = ()) -> BuiltinOutput:
+def compile_to_c(entry_file: Path, include_root: Path, out_dir: Path, search: list[Path] = (),
+                 line_directives: bool = False) -> BuiltinOutput:
     """Compile an ST entry file (and its includes) to C + manifest in out_dir; includes are looked up in
-    `search`, then under include_root (iec2c's -I folder, then its working directory)."""
+    `search`, then under include_root (iec2c's -I folder, then its working directory). `line_directives`:
+    `#line` before each statement, as iec2c's `-O l` (coverage builds)."""
     from .loader import load
     entry_file, include_root, out_dir = Path(entry_file), Path(include_root), Path(out_dir)
     elements, sources, names = load(entry_file, include_root, search)
-    header, units, manifest = _translate(elements, names)
+    header, units, manifest = _translate(elements, names, line_directives)
     return _write(header, units, manifest, out_dir, sources)
 
 
-def compile_text(text: str, out_dir: Path, name: str = "input.st") -> BuiltinOutput:
+def compile_text(text: str, out_dir: Path, name: str = "input.st", line_directives: bool = False) -> BuiltinOutput:
     """Compile ST source given as text (tests, tools); `name` is the file name diagnostics use."""
     from .parser import parse
     elements = parse(text, name)
-    header, units, manifest = _translate(elements, [name])
+    header, units, manifest = _translate(elements, [name], line_directives)
     return _write(header, units, manifest, Path(out_dir), [])
 
 
@@ -85,11 +87,11 @@ def check_text(text: str, name: str = "input.st"):
     return Checker().check(parse(text, name), [name])
 
 
-def _translate(elements, names) -> tuple[str, list[str], dict]:
+def _translate(elements, names, line_directives: bool = False) -> tuple[str, list[str], dict]:
     from .checker import Checker
     from .codegen import CodeGen
     prog = Checker().check(elements, names)
-    return CodeGen(prog, backend_version()).generate_units()
+    return CodeGen(prog, backend_version(), line_directives).generate_units()
 
 
 def _write(header_text: str, units: list[str], manifest: dict, out_dir: Path, sources: list[Path]) -> BuiltinOutput:

@@ -40,9 +40,11 @@ class BuiltinBackend:
     def flags(self) -> list[str]:
         return list(cc.BUILTIN_FLAGS)
 
-    def generate(self, src: Sources, c_dir: Path, version: str) -> Generated:
+    def generate(self, src: Sources, c_dir: Path, version: str, coverage: bool = False) -> Generated:
         try:
-            out = builtin.compile_to_c(src.entry, src.root, c_dir, search=src.search)
+            # a coverage build's C names the ST lines (#line), as iec2c's always does
+            extra = {"line_directives": True} if coverage else {}
+            out = builtin.compile_to_c(src.entry, src.root, c_dir, search=src.search, **extra)
         except BuiltinCompileError as exc:
             raise Rejected([str(d) for d in exc.diagnostics] or str(exc).splitlines()) from None
         units = list(out.c_files)

@@ -63,6 +63,8 @@ def c_string(data: bytes) -> str:
 # length at statement boundaries: gcc's time and memory grow faster than linearly with one function's
 # length (docs/builtin-compiler.md, "Long bodies").
 BODY_PART_LINES = 1000
+# the file name of the C between ST bodies in a coverage build (line_reset): not a .st, so left out of reports
+GENERATED_FILE = "plc_builtin.generated.c"
 # A constant initialiser longer than this (a PVL dataset) is a file-scope constant of its own, which
 # units.py may put in another unit than the code that copies it
 DATA_CHUNK_CHARS = 20_000
@@ -102,9 +104,14 @@ class Site:
 
 
 class CodeGen:
-    def __init__(self, prog: Program, backend_version: str):
+    def __init__(self, prog: Program, backend_version: str, line_directives: bool = False):
         self.prog = prog
         self.version = backend_version
+        # `#line` before each statement (and ELSIF, UNTIL, FOR step), so gcc's line table and gcov's counts
+        # name ST lines (coverage builds, docs/coverage.md); the C after a body goes back to GENERATED_FILE
+        self.line_directives = line_directives
+        self.generated_line = 0
+        self.st_line: str | None = None       # the `#line` of the statement being generated
         self.lines: list[str] = []
         self.wrapped: list[str] = []          # C types needing __DECLARE_V, in order
         self._wrapped_set: set[str] = set()
@@ -143,7 +150,23 @@ class CodeGen:
         return f"__t{self.tmp}"
 
     def emit(self, text: str) -> None:
+        if self.st_line is not None:
+            # each C line its own directive: a statement's C may take several lines, all of its ST line
+            self.body.append(self.st_line)
         self.body.append("  " * self.indent + text)
+
+    def line_at(self, pos: A.Pos) -> None:
+        """The C emitted next is the code of this ST position (coverage builds)."""
+        if self.line_directives:
+            self.st_line = f"#line {pos.line} {c_string(pos.file.encode())}"
+
+    def line_reset(self, lines: list[str]) -> None:
+        """The C that follows is no ST line's: it counts on lines of GENERATED_FILE, which reports leave out
+        (a distinct line per reset, so gcov never merges two of them)."""
+        if self.line_directives:
+            self.st_line = None
+            self.generated_line += 1
+            lines.append(f'#line {self.generated_line} "{GENERATED_FILE}"')
 
     # ------------------------------------------------------------------ values (initial values, defaults)
     def default_value(self, t: T.Type):
@@ -435,6 +458,7 @@ class CodeGen:
         self.indent = 1
         self.statements(p.ast.body)
         lines.extend(self.body)
+        self.line_reset(lines)
         lines.append("__end: ;")
         for v in p.params:
             if v.kind == "VAR_OUTPUT":
@@ -570,13 +594,16 @@ class CodeGen:
         head = []
         if len(parts) == 1:
             lines.extend(parts[0])
+            self.line_reset(lines)
         else:
             # a long body: each part its own function (gcc's cost grows faster than the length of one);
             # a RETURN inside a part ends the part with 1, and the body with it
             for k, part in enumerate(parts, 1):
                 name = f"{p.key}_body__part{k}"
+                reset: list[str] = []
+                self.line_reset(reset)
                 head.append((name, [f"__attribute__((noinline)) static int {name}({p.ty.cname} *data__)", "{",
-                                    *part, "  return 0;", "__end: return 1;", "}", ""]))
+                                    *part, *reset, "  return 0;", "__end: return 1;", "}", ""]))
                 lines.append(f"  if ({name}(data__)) goto __end;")
         lines.append("__end: ;")
         lines.append("}")
@@ -588,6 +615,7 @@ class CodeGen:
         parts = []
         self.body = []
         for s in stmts:
+            self.line_at(s.pos)
             getattr(self, "st_" + type(s).__name__)(s)
             if len(self.body) >= BODY_PART_LINES:
                 parts.append(self.body)
@@ -660,6 +688,7 @@ class CodeGen:
     # ------------------------------------------------------------------ statements
     def statements(self, stmts: list[A.Node]) -> None:
         for s in stmts:
+            self.line_at(s.pos)
             getattr(self, "st_" + type(s).__name__)(s)
 
     def st_Assign(self, s: A.Assign) -> None:
@@ -729,6 +758,8 @@ class CodeGen:
     def st_If(self, s: A.If) -> None:
         for i, (cond, body) in enumerate(s.branches):
             kw = "if" if i == 0 else "} else if"
+            if i:
+                self.line_at(cond.pos)      # the ELSIF's test is its line's code, not the arm's before
             self.emit(f"{kw} ({self.cond(cond)}) {{")
             self.nested(body)
         if s.else_body is not None:
@@ -767,6 +798,7 @@ class CodeGen:
                     f"{tmp} == {self.case_lit(lo, unsigned64)}" if lo == hi else
                     f"({tmp} >= {self.case_lit(lo, unsigned64)} && {tmp} <= {self.case_lit(hi, unsigned64)})"
                     for lo, hi in rngs if not (unsigned64 and hi < 0)) or "0"
+                self.line_at(s.pos)         # each label test is the CASE line's code
                 self.emit(f"{'if' if first else '} else if'} ({conds}) {{")
                 first = False
                 self.nested(body)
@@ -793,6 +825,7 @@ class CodeGen:
             self.emit("break;")
             self.indent -= 1
             self.emit("}")
+        self.line_at(s.pos)                 # no ELSE: its jump out is the CASE line's code
         self.emit("default: {")
         self.indent += 1
         if s.else_body is not None:
@@ -837,6 +870,7 @@ class CodeGen:
         self.statements(s.body)
         self.loops.pop()
         self.emit(f"__cont{n}: ;")
+        self.line_at(s.pos)                 # the step and the end test are the FOR line's code
         self.emit(f"__e{n} = ({wide})({self.expr(s.end)}); __b{n} = ({wide})({step});")
         self.emit(f"{{ {wide} __n{n} = ({wide}){cvar} + __b{n};")
         self.indent += 1
@@ -860,6 +894,7 @@ class CodeGen:
         n = self.new_label()
         self.emit("do {")
         self.nested(s.body, loop=n)
+        self.line_at(s.cond.pos)            # the UNTIL test is its line's code
         self.emit(f"}} while (!({self.cond(s.cond)}));")
         self.emit(f"__exit{n}: ;")
 

@@ -8,7 +8,7 @@ from pathlib import Path
 from .. import cc
 from ..backend import Generated, Rejected
 from ..sources import Sources
-from . import iec2c, layout
+from . import iec2c, layout, line_map
 
 PACKAGE_DIR = Path(__file__).parent
 BUILTIN_DIR = PACKAGE_DIR.parent / "builtin"
@@ -38,18 +38,25 @@ class MatiecBackend:
 
     def generator_files(self) -> list[Path]:
         # st_decls reads declarations with the builtin parser: its files shape the MatIEC manifest too
-        own = [PACKAGE_DIR / name for name in ("backend.py", "iec2c.py", "layout.py", "st_decls.py")]
+        own = [PACKAGE_DIR / name for name in ("backend.py", "iec2c.py", "layout.py", "st_decls.py", "line_map.py")]
         return [*own, *sorted(BUILTIN_DIR.glob("*.py")), BUILTIN_DIR / "st.lark"]
 
     def flags(self) -> list[str]:
         return list(iec2c.flags(self._tool().iec2c)) + unit_flags()
 
-    def generate(self, src: Sources, c_dir: Path, version: str) -> Generated:
+    def generate(self, src: Sources, c_dir: Path, version: str, coverage: bool = False) -> Generated:
         tool = self._tool()
         try:
             manifest, units, plain_units = layout.generate(tool, src, c_dir, version)
         except iec2c.MatiecError as exc:
             raise Rejected(exc.diagnostics) from None
+        if coverage:
+            # iec2c's C has `#line` already (flags(): `-O l`); made exact per C line and ELSIF
+            table = line_map.elsif_table(src.root, list(src.files))
+            for c_file in sorted(c_dir.glob("*.c")):
+                text = c_file.read_text()
+                if "#line" in text:
+                    c_file.write_text(line_map.exact_lines(text, table, c_file.name))
         if not trap_flags_supported():
             manifest.setdefault("warnings", []).append(
                 "array indices are not checked: the C compiler has no trapping bounds sanitizer")

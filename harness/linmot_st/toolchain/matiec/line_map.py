@@ -1,0 +1,112 @@
+"""iec2c's `#line` directives made exact for coverage builds (docs/coverage.md, "MatIEC").
+
+iec2c (`-O l`) writes one `#line N "file"` before the C of each ST statement (generate_c_st.cc,
+print_line_directive in the statement list). Two things then count on the wrong ST line in gcov:
+- the C lines after the first of a statement are numbered N+1, N+2 ... (a directive numbers the line after
+  it, and the ones after that count on), ST lines that may hold other code or none;
+- `} else if (cond) {` has no directive of its own: the ELSIF's test counts on the line of the last
+  statement of the arm before it.
+- the C after the body (the rest of the function, the next functions of the file) counts on the lines
+  after the last statement's.
+`exact_lines` repeats the directive before each C line that starts a statement (the line before it ends
+a statement or a block: `;`, `{`, `}`; never inside a macro call, an expression or a macro's definition),
+puts the ELSIF's own line before each `} else if (`: the first ELSIF of that file after the line in
+effect (the arm before it ends there, so no other ELSIF lies between), and returns to the C file's own
+numbering after each function.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+_DIRECTIVE = re.compile(r'^\s*#line\s+(\d+)\s+"((?:[^"\\]|\\.)*)"\s*$')
+_ELSE_IF = re.compile(r"^\s*\}\s*else\s+if\s*\(")
+
+
+def exact_lines(text: str, elsif_lines, c_name: str) -> str:
+    """The C text with directives repeated and ELSIF lines set. `elsif_lines(file) -> sorted list[int]`:
+    the lines of the ELSIF keywords' tests in that ST file (as the #line names it); `c_name`: the C file's
+    name, for the C after a function."""
+    out: list[str] = []
+    current: tuple[int, str] | None = None      # (ST line, file as written) in effect
+    boundary = True                             # the previous C line ended a statement or a block
+    continued = False                           # the previous line ended in a backslash (a macro's body)
+    for line in text.split("\n"):
+        if continued:
+            continued = line.rstrip().endswith("\\")
+            out.append(line)
+            continue
+        continued = line.rstrip().endswith("\\")
+        m = _DIRECTIVE.match(line)
+        if m:
+            current = (int(m[1]), m[2])
+            out.append(line)
+            boundary = False            # the next line has this directive already
+            continue
+        stripped = line.strip()
+        if current is not None and stripped and not stripped.startswith("#"):
+            if _ELSE_IF.match(line):
+                later = [n for n in elsif_lines(current[1]) if n > current[0]]
+                if later:
+                    current = (later[0], current[1])
+                out.append(f'#line {current[0]} "{current[1]}"')
+            elif boundary:
+                out.append(f'#line {current[0]} "{current[1]}"')
+        out.append(line)
+        if stripped and not stripped.startswith("#"):
+            boundary = stripped.endswith((";", "{", "}")) and not stripped.endswith("\\")
+        if current is not None and line.startswith("}"):
+            # a function ends (iec2c writes its closing brace at column 0): the C after it is no ST line's;
+            # back to the C file's own numbering (the directive numbers the line after it)
+            out.append(f'#line {len(out) + 2} "{c_name}"')
+            current = None
+    return "\n".join(out)
+
+
+def decisions(stmts: list) -> list:
+    """Every IF and CASE statement in these statements, nested ones included, in source order."""
+    from ..builtin import ast as A
+    out = []
+    for s in stmts:
+        if isinstance(s, A.If):
+            out.append(s)
+            for _, body in s.branches:
+                out += decisions(body)
+            out += decisions(s.else_body or [])
+        elif isinstance(s, A.Case):
+            out.append(s)
+            for _, body in s.elements:
+                out += decisions(body)
+            out += decisions(s.else_body or [])
+        elif isinstance(s, (A.For, A.While, A.Repeat)):
+            out += decisions(s.body)
+    return out
+
+
+def elsif_lines(path: Path) -> list[int]:
+    """The lines of the tests of every ELSIF in an ST file, sorted (read with the builtin parser)."""
+    from ..builtin import ast as A
+    from ..builtin.errors import BuiltinCompileError
+    from ..builtin.parser import parse
+    try:
+        elements = parse(Path(path).read_text(errors="replace"), str(path))
+    except (BuiltinCompileError, OSError, RecursionError):
+        return []
+    return sorted({cond.pos.line for e in elements if isinstance(e, A.Pou)
+                   for s in decisions(e.body) if isinstance(s, A.If) for cond, _ in s.branches[1:]})
+
+
+def elsif_table(root: Path, sources: list[Path]):
+    """elsif_lines for exact_lines by the name a `#line` gives: looked up among the build's sources (by
+    its tail: an included file is named by its include path), else against the root."""
+    cache: dict[str, list[int]] = {}
+
+    def lookup(name: str) -> list[int]:
+        if name not in cache:
+            p = Path(name)
+            path = p if p.is_absolute() else next(
+                (s for s in sources if Path(s).parts[-len(p.parts):] == p.parts), root / p)
+            cache[name] = elsif_lines(Path(path))
+        return cache[name]
+    return lookup
