@@ -1,7 +1,8 @@
 """MC_CamTableSelect / MC_CamIn / MC_CamOut (st_lib/motion/cam.st) against the emulated E1100's encoder cams: the
 PLC selects a cam curve (object type 0103h) in the drive's RAM, couples the axis to the master encoder, and the
 drive's demand follows the curve as written at the encoder's counter (computed here from the setpoints, not from
-the emulator's cam model); CamOut brakes to standstill; refusals before any frame."""
+the emulator's cam model); EndOfProfile at the cycle end; CamOut brakes to standstill; refusals before any
+frame."""
 
 from __future__ import annotations
 
@@ -53,14 +54,20 @@ def test_cam_in_follows_the_master_encoder_and_cam_out_stops():
     assert r.done and r["CAMTABLEID"] == 1, r
     assert mc.params[U.P_CAM_MODE].ram == 1                             # periodic: modulo cam length
     cam_in = b.fb("CAMIN")
-    cam_in.start(CAMTABLEID=1)
+    cam_in.start(CAMTABLEID=1, MASTERSTART=0, MASTERLENGTH=LENGTH)
     b.sim.run_until(lambda: cam_in["INSYNC"] or cam_in["ERROR"], max_scans=100)
     assert cam_in["INSYNC"] and cam_in["BUSY"], (cam_in["ERRORID"], cam_in["DRIVEERROR"])
     assert heads(b, t0) == [0x002, 0x111, 0x116, 0x100]
     # the conveyor turns: 1.5 revolutions at 10 000 counts/s
     t1 = b.bus.now
     mc.encoder.drive_with(SpeedProfile([(t1, 10_000)]), t1)
-    b.step(1200)
+    pulses = []
+    for _ in range(1200):
+        b.step(1)
+        if cam_in["ENDOFPROFILE"]:
+            pulses.append(mc.encoder.counts(b.bus.now))
+    # one cycle end (8000 counts, at 0.8 s), seen within two SDO reads of the master count (1BA0h)
+    assert len(pulses) == 1 and 8000 <= pulses[0] <= 8000 + 10_000 * 0.010, pulses
     samples = mc.trajectory.between(t1 + 2 * MS, b.bus.now)
     assert len(samples) > 100
     for s in samples:
