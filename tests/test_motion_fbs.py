@@ -44,8 +44,8 @@ def test_encoder_against_the_shared_vectors():
     b = MotionBench(nodes=1)
     vectors = json.loads((VECTORS / "motion_commands.json").read_text())["vectors"]
     for v in vectors:
-        fields = list(v["fields"].values()) + [0, 0, 0, 0]
-        for name, value in zip(("ENCA", "ENCB", "ENCC", "ENCD"), fields[:4]):
+        fields = list(v["fields"].values()) + [0, 0, 0, 0, 0]
+        for name, value in zip(("ENCA", "ENCB", "ENCC", "ENCD", "ENCE"), fields[:5]):
             b[name] = value
         b["ENCCID"] = int(v["cid"], 16)
         b["ENCCOUNT"] = v["count"]

@@ -33,7 +33,7 @@ def test_rows_are_consistent():
     for cid, c in C.COMMANDS.items():
         assert cid == c.cid and 0 <= cid <= 0xFFF
         assert c.kind in HANDLERS, f"{cid:03X}h: no handler for {c.kind}"
-        assert len(c.fields) <= 4 and len(set(c.field_names)) == len(c.fields)
+        assert len(c.fields) <= 5 and len(set(c.field_names)) == len(c.fields)
         assert c.states and c.states <= C.IN_ANY_STATE and c.drives
         assert c.source.startswith(("[MC] 4.3.", "seed 004 4.3."))     # 004xh: in the seed only
     # system commands run in every state, motion only in Operation Enabled (seed 004 3.7)
@@ -105,10 +105,11 @@ PROGRAM TB_Enc
     B : DINT;
     C : DINT;
     D : DINT;
+    E : DINT;
     Img : T_LmMotionImage;
     NBytes : USINT;
   END_VAR
-  NBytes := F_LmMotionEncode(Cid := Cid, Count := Count, A := A, B := B, C := C, D := D, Img := Img);
+  NBytes := F_LmMotionEncode(Cid := Cid, Count := Count, A := A, B := B, C := C, D := D, E := E, Img := Img);
 END_PROGRAM
 
 CONFIGURATION Config0
@@ -137,7 +138,7 @@ def test_the_regenerated_st_encoder_encodes_a_new_row(monkeypatch, tmp_path, bac
     for cid, count, fields in cases:
         expected = C.encode(cid, count, **fields)
         plc["ENC.CID"], plc["ENC.COUNT"] = cid, count
-        for name, value in zip("ABCD", list(fields.values()) + [0] * 4):
+        for name, value in zip("ABCDE", list(fields.values()) + [0] * 5):
             plc[f"ENC.{name}"] = value
         plc.step(1)
         assert plc["ENC.NBYTES"] == len(expected) - 2, hex(cid)

@@ -6,6 +6,8 @@
   the 1-minute load average at the time: on a shared, loaded 2-core machine one run can drop far below;
 - the drive alone (sans-I/O, no bus): expedited parameter reads per wall-clock second, best of the runs;
 - the cost of moving axes (motion/bench.py): simulated seconds per wall second for 1 and 16 drives;
+- the cost of a cam (motion/cam_bench.py): one drive following a master encoder, simulated s per wall s;
+- the cost of a stream: one drive streaming PV setpoints at 2 ms SYNC (motion/stream_bench.py);
 - virtual time of a 1,000-setpoint curve download with the 4-byte services (1 + 18 + 1,000 exchanges),
   back to back with no PLC, at 500 kbit/s and 1 Mbit/s (spec/can-bus-limits.md: 226..275 ms at 1 Mbit/s
   with zero turnaround, plus the turnaround per exchange).
@@ -23,6 +25,7 @@ from .linmot.curves import Curve
 from .linmot.drive import E1100Drive
 from .models import make_drive
 from .motion import bench as motion_bench
+from .motion import cam_bench, stream_bench
 
 S = 1_000_000_000
 RUNS = 5
@@ -99,7 +102,7 @@ def run() -> list[dict]:
              value=round(measure_curve_download(1000, 500_000), 1), unit="ms", target=None),
         dict(name="1000-setpoint curve download, 4-byte services, back to back, 1 Mbit/s (virtual time)",
              value=round(measure_curve_download(1000, 1_000_000), 1), unit="ms", target=None),
-    ] + motion_bench.run()
+    ] + motion_bench.run() + cam_bench.run() + stream_bench.run()
 
 
 if __name__ == "__main__":

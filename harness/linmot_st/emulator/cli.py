@@ -26,6 +26,9 @@ def register(subparsers) -> None:
     p.add_argument("--fast", action="store_true", help="short boot/MC/flash durations (for demos and tests)")
     p.add_argument("--duration", type=non_negative_seconds,
                    help="stop after this many seconds (default: until interrupted)")
+    p.add_argument("--master-encoder", metavar="SIGNAL",
+                   help="turn the drive's master encoder input ([MC] 7.3; counted once 172Ah selects a source): "
+                        "speed:EDGES_PER_S, profile:T=EDGES_PER_S,... (T in s) or recorded:FILE (CSV s,edges)")
     p.add_argument("--dump-memory", metavar="FILE",
                    help="when stopped, write the drive's memory (parameters ROM and RAM, curves and command table "
                         "in RAM and flash) to FILE as JSON (emulator/linmot/memory.py), to check what a PLC wrote")
@@ -54,6 +57,7 @@ def run(args: argparse.Namespace) -> int:
 
     from ..bus import open_bus, parse_bus_spec
     from .linmot.drive import DriveTimings
+    from .linmot.master_encoder import parse_signal
     from .linmot.profile import ProfileError, load_profile
     from .models import make_drive, model_named
 
@@ -67,6 +71,7 @@ def run(args: argparse.Namespace) -> int:
         if args.dump_memory:
             check_output_file(args.dump_memory, f"--dump-memory {args.dump_memory}")
         profile = load_profile(args.profile) if args.profile else None
+        signal_ = parse_signal(args.master_encoder) if args.master_encoder else None
     except ProfileError as exc:
         return _error(f"--profile {exc}", 2)
     except OSError as exc:
@@ -74,6 +79,8 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as exc:
         return _error(str(exc), 2)
     drive = make_drive(model, args.node_id, profile=profile, timings=DriveTimings.fast() if args.fast else None)
+    if signal_ is not None:
+        drive.mc.encoder.drive_with(signal_, 0)
     from .linmot.io_script import ScriptError, apply_line, apply_script
     try:
         if args.input:

@@ -125,7 +125,7 @@ def plan(pvl, position_mm: float = 50.0, settings=None) -> Plan:
         info = c.info
         if info.object_type != 0x0003:
             not_run.append(f"curve {c.curve_id} {info.name}: object type {info.object_type:04X}h (a cam profile) "
-                           "needs a master encoder, which the emulated drive does not simulate")
+                           "follows a master encoder: the job has no cam step (plc_project drives no encoder cam)")
             continue
         run = CurveRun(c.curve_id, info.name, list(c.setpoints), info.x_length * 10_000 * time_scale // 10000,
                        offset, amplitude)

@@ -117,7 +117,7 @@ def parse_st(text: str) -> dict[str, int]:
 # ---------------------------------------------------------------- the motion command encoder
 
 _PUT = {2: ("F_LmImgPutU16", "DINT_TO_UINT"), 4: ("F_LmImgPutU32", "DINT_TO_UDINT")}
-_PARAMS = "ABCD"
+_PARAMS = "ABCDE"
 
 
 def _layout(c: CommandDef) -> tuple[int, ...]:
@@ -163,12 +163,12 @@ def render_codec(commands: Mapping[int, CommandDef] | None = None) -> str:
         "FUNCTION F_LmMotionEncode : USINT",
         "  (* the image of command Cid (the header's upper 12 bits, e.g. 16#090 for 090xh) with count Count:",
         "     header in bytes 0..1, parameters from byte 2 in the command's layout; returns the number of parameter",
-        "     bytes, 255 for a command this library does not encode. A..D are the parameters in the order of",
+        "     bytes, 255 for a command this library does not encode. A..E are the parameters in the order of",
         "     [MC] 4.3, each converted to its field's width (signed fields two's complement):",
         *[line.replace("(*", "( *").replace("*)", "* )") for line in table],
         "  *)",
         "  VAR_INPUT", "    Cid : UINT;", "    Count : USINT;", "    A : DINT;", "    B : DINT;", "    C : DINT;",
-        "    D : DINT;", "  END_VAR",
+        "    D : DINT;", "    E : DINT;", "  END_VAR",
         "  VAR_IN_OUT", "    Img : T_LmMotionImage;", "  END_VAR",
         "  VAR", "    N : USINT;", "    Ok : BOOL;", "    I : INT;", "  END_VAR",
         "  I := 0;", "  WHILE I <= 17 DO", "    Img[I] := 0;", "    I := I + 1;", "  END_WHILE;",

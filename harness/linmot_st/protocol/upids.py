@@ -24,6 +24,7 @@ P_CW_COPY_MASK, P_CW_FORCE_MASK, P_CW_FORCE_VALUES = 0x1700, 0x1701, 0x1702   # 
 P_RANGE1_UPID, P_RANGE1_MIN, P_RANGE1_MAX = 0x1780, 0x1781, 0x1782   # INVENTED (1710h is [MC] 7.2.2's fall delay)
 P_ACTIVE_CONTROLLER_SET = 0x1393                                     # [MC] 4.3.5 (005xh writes it)
 P_MAX_CURRENT_SET_A, P_MAX_CURRENT_SET_B = 0x13A6, 0x13BA            # [MC] 4.3.114..116, 7.2.1.2
+P_STREAM_PERIOD = 0x14E6                                             # [MC] 4.3.40/41/43, 5.4
 P_READY_TO_OPERATE_MODE = 0x6300                                     # [S004] 3.7, [MC] 3.7
 
 # the variables the MC publishes (read by SDO as UPID RAM values, mapped into TxPDOs)
@@ -46,6 +47,8 @@ P_TRIG_CAM_CURVE_RISE, P_TRIG_CAM_CURVE_FALL = 0x154A, 0x154B        # [MC] 4.3.
 P_TRIG_CAM_DELAY_RISE, P_TRIG_CAM_DELAY_FALL = 0x154C, 0x154D        # [MC] 4.3.63..68
 V_CAM_ENABLED = 0x1BA9                                               # [MC] 5.5.2
 V_MASTER_ENCODER_COUNTS, V_MASTER_ENCODER_SPEED = 0x1BA0, 0x1BA1     # INVENTED
+P_WINDING_LEFT, P_WINDING_RIGHT, P_WINDING_PITCH = 0x1540, 0x1541, 0x1542    # INVENTED ([MC] gives headers only)
+V_ACTUAL_FORCE = 0x1BFF                 # zylos146/CANFuck docs/a1100-pdo-config.md (actual force, 0.1 N)
 # the drive's I/O (emulator/linmot/io.py) and the triggered commands (emulator/motion/triggered.py)
 P_TRIGGER_MODE = 0x170C                                              # [MC] 7.2.2
 P_TRIG_RISE_INHIBIT, P_TRIG_FALL_INHIBIT = 0x170D, 0x170E            # [MC] 7.2.2.2

@@ -114,6 +114,7 @@ class E1100Drive(NmtSlave):
         self.motion = motion or MotionSettings()
         self.mc = MotionControl(self.motion, self.timings.hw_test_ns, self.params, self.curves, self.ct,
                                 self._log_error)
+        self.mc.series = model.name        # the catalogue rows' `drives` say which commands it has
         self.params.live = self.mc.variable
         self.mc.on_reset = lambda t: self._at(t, self._start_boot)     # 00Fxh: the whole firmware restarts
         self.io = DriveIO(io, par=self.mc.par)

@@ -49,7 +49,7 @@ class ConstantSpeed:
         self.speed, self.start, self.t0_ns = float(speed), float(start), t0_ns
 
     def counts(self, t_ns: int) -> float:
-        return self.start + self.speed * (t_ns - self.t0_ns) * NS
+        return self.start + self.speed * ((t_ns - self.t0_ns) / 1e9)
 
     def rate(self, t_ns: int) -> float:
         return self.speed
@@ -66,7 +66,7 @@ class SpeedProfile:
             raise ValueError("speed profile steps must be in increasing time")
         self.base = [float(start)]
         for i in range(1, len(self.times)):
-            self.base.append(self.base[-1] + self.speeds[i - 1] * (self.times[i] - self.times[i - 1]) * NS)
+            self.base.append(self.base[-1] + self.speeds[i - 1] * ((self.times[i] - self.times[i - 1]) / 1e9))
 
     def _seg(self, t_ns: int) -> int:
         return bisect.bisect_right(self.times, t_ns) - 1
@@ -75,7 +75,7 @@ class SpeedProfile:
         i = self._seg(t_ns)
         if i < 0:
             return self.base[0]
-        return self.base[i] + self.speeds[i] * (t_ns - self.times[i]) * NS
+        return self.base[i] + self.speeds[i] * ((t_ns - self.times[i]) / 1e9)
 
     def rate(self, t_ns: int) -> float:
         i = self._seg(t_ns)
@@ -131,13 +131,36 @@ class Function:
 class MasterEncoder:
     """The drive's master encoder counter. `par(upid, default)` reads the encoder parameters' RAM values;
     `before_change(t)` is called before the signal or the counter changes (the MC syncs its cycles to t, so
-    nothing it computed ahead used the old signal)."""
+    nothing it computed ahead used the old signal).
+
+    The counter's history is kept: `segments` = [(from t_ns, signal, offset)], one per drive_with / set_value,
+    so `counts(t)` is the counter at any time, past ones included (the trajectory record reads it for its
+    samples: Trajectory.master_counts). The encoder parameters are read as they are now."""
 
     def __init__(self, par: Callable[[int, int], int], before_change: Callable[[int], None] | None = None):
         self._par = par
         self._before_change = before_change or (lambda t: None)
-        self.signal: Signal = Standstill()
-        self.offset = 0             # counts added by Encoder Cam Set Value (104xh)
+        self.segments: list[tuple[int, Signal, int]] = [(-(1 << 62), Standstill(), 0)]
+        self._starts = [-(1 << 62)]
+
+    @property
+    def signal(self) -> Signal:
+        return self.segments[-1][1]
+
+    @property
+    def driven(self) -> bool:
+        """A signal or a counter value was ever given."""
+        return len(self.segments) > 1
+
+    def _segment(self, t_ns: int) -> tuple[int, Signal, int]:
+        return self.segments[bisect.bisect_right(self._starts, t_ns) - 1]
+
+    def _new_segment(self, t_ns: int, signal: Signal, offset: int) -> None:
+        if self._starts[-1] == t_ns and len(self.segments) > 1:
+            self.segments[-1] = (t_ns, signal, offset)
+        else:
+            self.segments.append((t_ns, signal, offset))
+            self._starts.append(t_ns)
 
     # ---- driving it (tests, `linmot-st emulate`) ----
     def drive_with(self, signal: Signal, t_ns: int) -> None:
@@ -145,13 +168,13 @@ class MasterEncoder:
         the jump, as a counter does when a cable is plugged)."""
         self._before_change(t_ns)
         before = self.counts(t_ns)
-        self.signal = signal
-        self.offset += before - self.counts(t_ns)
+        self._new_segment(t_ns, signal, before - self._raw(signal, t_ns))
 
     def set_value(self, value: int, t_ns: int) -> None:
         """104xh: the counter reads `value` now."""
         self._before_change(t_ns)
-        self.offset += int(value) - self.counts(t_ns)
+        signal = self._segment(t_ns)[1]
+        self._new_segment(t_ns, signal, int(value) - self._raw(signal, t_ns))
 
     # ---- what the drive reads ----
     @property
@@ -165,15 +188,29 @@ class MasterEncoder:
         sign = -1.0 if self._par(P_MASTER_ENCODER_DIRECTION, 0) else 1.0
         return sign / _EDGES_PER_COUNT.get(decoding, 1)
 
+    def _raw(self, signal: Signal, t_ns: int) -> int:
+        """The signal's counts through decoding and direction (whole increments; the 1e-6 absorbs the float
+        rounding of a signal that lands exactly on an edge)."""
+        if not self.connected:
+            return 0
+        return math.floor(signal.counts(t_ns) * self._scale() + 1e-6)
+
     def counts(self, t_ns: int) -> int:
         """The counter at t_ns (whole increments)."""
-        if not self.connected:
-            return self.offset
-        return math.floor(self.signal.counts(t_ns) * self._scale()) + self.offset
+        _, signal, offset = self._segment(t_ns)
+        return self._raw(signal, t_ns) + offset
 
     def rate(self, t_ns: int) -> float:
         """Counts/s at t_ns (unfiltered: the slope the cam's feedforward uses)."""
-        return self.signal.rate(t_ns) * self._scale() if self.connected else 0.0
+        return self._segment(t_ns)[1].rate(t_ns) * self._scale() if self.connected else 0.0
+
+    def sample(self, t_ns: int) -> tuple[int, float]:
+        """(counts, rate) at t_ns: what the followers read once per MC cycle, the parameters read once."""
+        _, signal, offset = self._segment(t_ns)
+        if not self.connected:
+            return offset, 0.0
+        scale = self._scale()
+        return math.floor(signal.counts(t_ns) * scale + 1e-6) + offset, signal.rate(t_ns) * scale
 
     def speed(self, t_ns: int) -> float:
         """Counts/s averaged over the speed filter time 1293h (in 0.1 ms: INFERRED unit)."""
@@ -185,3 +222,30 @@ class MasterEncoder:
 
     def revolutions(self, t_ns: int) -> float:
         return self.counts(t_ns) / self.counts_per_rev()
+
+
+def parse_signal(spec: str) -> Signal:
+    """A signal from a command-line spec (`linmot-st emulate --master-encoder`):
+    `speed:EDGES_PER_S` (constant speed from time 0), `profile:T=EDGES_PER_S,T=EDGES_PER_S,...` (T in seconds of
+    the drive's clock, each speed holding until the next), `recorded:FILE` (a CSV of `seconds,edges` lines,
+    linear between). Raises ValueError with what is wrong."""
+    kind, _, rest = spec.partition(":")
+    try:
+        if kind == "speed":
+            return ConstantSpeed(float(rest))
+        if kind == "profile":
+            steps = []
+            for item in rest.split(","):
+                t, _, v = item.partition("=")
+                steps.append((round(float(t) * 1e9), float(v)))
+            return SpeedProfile(steps)
+        if kind == "recorded":
+            import csv
+            with open(rest, newline="") as f:
+                rows = [r for r in csv.reader(f) if r and not r[0].lstrip().startswith("#")]
+            return Recorded([(round(float(t) * 1e9), float(c)) for t, c in rows])
+    except OSError as exc:
+        raise ValueError(f"{rest}: {exc.strerror or exc}") from None
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"master encoder signal {spec!r}: {exc}") from None
+    raise ValueError(f"master encoder signal {spec!r}: expected speed:N, profile:T=N,... or recorded:FILE")

@@ -35,6 +35,7 @@ from .settings import MotionSettings
 from .setpoints import Hold
 from .state_machine import StateMachine
 from .status import StatusWords
+from .stream import check as stream_check
 from .trajectory import Sample, Trajectory
 
 
@@ -52,10 +53,11 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
         self.executed: list[tuple[int, int, bytes]] = []   # (t_ns, header, parameters) of every command run
         self.ct_runner = CtRunner(self)
         self.encoder = MasterEncoder(self.par, self.sync)      # the master encoder input ([MC] 7.3)
-        self.pending = PendingMotions()           # the queued motion and position transition (pending.py)
-        self.on_reset: Callable[[int], None] | None = None   # 00Fxh: the drive restarts (set by the drive)
+        self.trajectory.master_encoder = self.encoder
         self.events = EventHandler(self)
         self.io = None                      # the drive's I/O (emulator/linmot/io.py), set by the drive
+        self.pending = PendingMotions()           # the queued motion and position transition (pending.py)
+        self.on_reset: Callable[[int], None] | None = None   # 00Fxh: the drive restarts (set by the drive)
         self.running = False
         self.power_on_reset()
         self._reset_state()
@@ -79,6 +81,7 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
         self.gen = Hold(self.axis.position)
         self.dem_p, self.dem_v = self.axis.position, 0.0
         self.last_vai: tuple | None = None       # (target, vmax, acc, dec) of the last VAI motion
+        self._encoder_cams = None                # cam definitions (encoder_cams.py): RAM, lost here (INFERRED)
         self.frozen: tuple | None = None
         self.after_stop: str | None = None       # what the running stop ramp ends in: "error", "off3", None
         self.warn_bits = 0
@@ -93,10 +96,10 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
         self._prev_vd = 0.0
         self._now = getattr(self, "_now", 0)
         self.ct_runner.stop()
+        self.events.clear()
         self.pending.clear()
         self.current_limited = False             # a With Max Curr command ran: the axis limits its current
         self.axis.current_limit_ma = None
-        self.events.clear()
 
     # ------------------------------------------------------------------ parameters
     def par(self, upid: int, default: int = 0) -> int:
@@ -280,6 +283,8 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
                 self.events.step(t)
             if self.ct_runner.running:
                 self.ct_runner.step(t)
+            if self.controlled and self.gen.kind == "stream":
+                stream_check(self, t)      # underflow, a master too slow
             if self.after_stop is not None and self.gen.done(t):
                 then, self.after_stop = self.after_stop, None
                 if then == "error":
@@ -288,7 +293,8 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
                     self._power_off(t, W.SWITCH_ON_DISABLED)
         # keep cycling while anything can still change
         self._update_in_target(t)
-        busy = (not self.gen.done(t) or self.ct_runner.running or axis.blocked or self.pending.armed or self.events.pending
+        busy = (not self.gen.done(t) or self.ct_runner.running or axis.blocked or self.events.pending
+                or self.pending.armed
                 or (self.state in W.SPECIAL_STATES and self.sub != W.SUB_FINISHED)
                 or (self._in_window_since is not None and not self.in_target))
         if self.controlled:

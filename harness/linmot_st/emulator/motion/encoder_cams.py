@@ -8,7 +8,8 @@ the master at any speed, forwards and backwards, and the MC's quiet cycles (fast
 
 Cam mode 1527h ([MC] 5.5): 0 infinite length (a cam runs once from its start count; triggered cams), 1 modulo
 cam length (the counter taken modulo the cam length 1529h, or counts/revolution 1291h when 0: repeated cams).
-Between cams, the demand rests where the last cam started before the counter ended (INFERRED).
+Between cams, the demand rests at the end of the cam whose start the counter passed last (INFERRED). The cam
+definitions are RAM: an MC start or stop clears them (control.py, INFERRED).
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from ...protocol.upids import (
     P_CAM_MODE, P_CAM_MODULO_LENGTH, P_CURVE_AMPLITUDE, P_CURVE_OFFSET, P_QUICK_STOP_DEC, P_TRIG_CAM_CURVE_FALL,
     P_TRIG_CAM_CURVE_RISE, P_TRIG_CAM_DELAY_FALL, P_TRIG_CAM_DELAY_RISE,
 )
+from .drive_series import on_series
 from .setpoints import StopPlan, _demands_by_at
 from .units import ACC_RAW
 
@@ -65,7 +67,6 @@ class EncoderCams:
         self.mc = mc
         self.cams: dict[object, Cam] = {}
         self.enabled: dict[object, bool] = {1: False, 2: False}
-        self.armed: dict[bool, dict] = {}         # rising (True) / falling (False) edge -> the cam to start
 
     def modulo(self) -> int:
         """The modulo cam length, or 0 in infinite-length mode."""
@@ -81,13 +82,14 @@ class EncoderCams:
 
     def position(self, count: int) -> tuple[float, float] | None:
         """Demand position and its slope per count at the counter value `count` (None: no cam enabled)."""
-        active = [(k, c) for k, c in self.cams.items() if self.enabled.get(k)]
+        enabled = self.enabled
+        active = [(k, c) for k, c in self.cams.items() if enabled.get(k)]
         if not active:
             return None
         modulo = self.modulo()
         best = None
         for k, cam in active:
-            rel = (count - cam.start) % modulo if modulo else count - cam.start
+            rel = (count - cam.start) % modulo if modulo and k != "trigger" else count - cam.start
             if rel >= 0 and (best is None or rel < best[0]):
                 best = (rel, cam)
         if best is None:        # infinite length, before every cam: rest at the first one's start
@@ -112,11 +114,12 @@ class CamFollower:
         self.end_ns = NEVER
 
     def at(self, t_ns: int) -> tuple[float, float, float]:
-        found = self.cams.position(self.encoder.counts(t_ns))
+        count, rate = self.encoder.sample(t_ns)
+        found = self.cams.position(count)
         if found is None:
             return self.target, 0.0, 0.0
         p, slope = found
-        return p, slope * self.encoder.rate(t_ns), 0.0
+        return p, slope * rate, 0.0
 
     def done(self, t_ns: int) -> bool:
         return False
@@ -158,6 +161,8 @@ def _define(mc, c: CommandDef, f: dict, t: int, key) -> bool:
         if y[-1] == y[0]:
             return mc._fail(W.ERR_CURVE_AMP_SCALE, t)
         amp = (f["target"] - here) / (y[-1] - y[0])
+    if sub == C.CAM_DEFINE_FROM_ACT_POS:
+        here = mc.axis.position
     if sub in (C.CAM_DEFINE_FROM_ACT_POS, C.CAM_DEFINE_TO_POS, C.CAM_DEFINE_TO_POS_IN_COUNTS):
         offset = here - amp * y[0]                     # the motor stands at the cam's start ([MC] 4.3.155)
     if length <= 0 or not -20.0 <= amp <= 20.0:
@@ -208,8 +213,10 @@ _RISING = frozenset({C.TRIG_CAM_RISE, C.TRIG_CAM_RISE_TARGET_LENGTH, C.TRIG_CAM_
 
 
 def _triggered_cam(mc, c: CommandDef, f: dict, t: int) -> bool:
-    """069xh..06Exh: arm a cam start on the trigger edge; the curve ID and delay go to 154Ah..154Dh's RAM values
-    ([MC] 4.3.63..68; 06Exh's text names the rising-edge UPIDs, taken as a copy error: INFERRED 154Bh/154Dh)."""
+    """069xh..06Exh: "setup in the event handler to start a cam curve on the trigger event" ([MC] 4.3.63..68): the
+    curve ID and delay go to 154Ah..154Dh's RAM values (06Exh's text names the rising-edge UPIDs: taken as a copy
+    error, INFERRED 154Bh/154Dh), and the event handler runs the cam start on every matching edge until 008xh
+    (events.py, [MC] 4.3.6)."""
     if _curve(mc, f["curve_id"]) is None:
         return mc._fail(W.ERR_CURVE_NOT_DEFINED, t)
     rising = c.cid in _RISING
@@ -217,50 +224,32 @@ def _triggered_cam(mc, c: CommandDef, f: dict, t: int) -> bool:
                         (P_TRIG_CAM_DELAY_RISE if rising else P_TRIG_CAM_DELAY_FALL, f["delay"])):
         if upid in mc.params:
             mc.params[upid].ram = value
-    cams_of(mc).armed[rising] = dict(f)
+    fields = dict(f)
+    mc.events.arm(rising, lambda tc: _start_triggered(mc, fields, mc.events.last_edge.get(rising, tc), tc))
     return True
 
 
-def trigger_edge(mc, rising: bool, t: int) -> None:
-    """The trigger input saw an edge at t: a cam armed on it starts `delay` counts later, from the demand
-    position then (INFERRED), once (INFERRED: the event handler is set up again for the next part)."""
-    mc.sync(t)
-    cams = cams_of(mc)
-    f = cams.armed.pop(rising, None)
-    if f is None or not mc.running or mc.state != W.OPERATION_ENABLED:
-        return
+def _start_triggered(mc, f: dict, t_edge: int, t: int) -> bool:
+    """The armed edge came at t_edge (its action runs in the MC cycle at t): the cam starts `delay` counts after
+    the counter at the edge, from the demand position then (INFERRED), running once over its length (the
+    infinite cam length [MC] 5.5.1 asks for)."""
     curve = _curve(mc, f["curve_id"])
     if curve is None:
-        mc._fail(W.ERR_CURVE_NOT_DEFINED, t)
-        mc._record(t)
-        return
+        return mc._fail(W.ERR_CURVE_NOT_DEFINED, t)
+    cams = cams_of(mc)
     y = [float(v) for v in curve.setpoints]
     here = mc.gen.at(t)[0]
     amp = f.get("amplitude", mc.par(P_CURVE_AMPLITUDE, 1000)) / 1000.0
     if "target" in f and y[-1] != y[0]:
         amp = (f["target"] - here) / (y[-1] - y[0])
     length = f.get("cam_length") or curve.x_length
-    cams.cams["trigger"] = Cam(y, mc.encoder.counts(t) + f["delay"], max(int(length), 1), here - amp * y[0], amp)
+    if length <= 0 or not -20.0 <= amp <= 20.0:
+        return mc._fail(W.ERR_CURVE_AMP_SCALE, t)
+    cams.cams["trigger"] = Cam(y, mc.encoder.counts(t_edge) + f["delay"], int(length), here - amp * y[0], amp)
     cams.enabled["trigger"] = True
     if not cam_operating(mc):
         mc._start(CamFollower(t, cams, here))
-    mc._record(t)
+    return True
 
 
-def sync_variable(mc, upid: int) -> int | None:
-    """The variables of the master encoder and the cams (None: not one of them)."""
-    from ...protocol.upids import V_CAM_ENABLED, V_MASTER_ENCODER_COUNTS, V_MASTER_ENCODER_SPEED
-    if upid == V_MASTER_ENCODER_COUNTS:
-        return _s32(mc.encoder.counts(mc._now))
-    if upid == V_MASTER_ENCODER_SPEED:
-        return _s32(round(mc.encoder.speed(mc._now)))
-    if upid == V_CAM_ENABLED:
-        return int(cam_operating(mc))
-    return None
-
-
-def _s32(v: int) -> int:
-    return (int(v) + (1 << 31)) % (1 << 32) - (1 << 31)
-
-
-HANDLERS = {C.Kind.ENCODER_CAM: _cam_command, C.Kind.TRIGGERED_CAM: _triggered_cam}
+HANDLERS = {C.Kind.ENCODER_CAM: on_series(_cam_command), C.Kind.TRIGGERED_CAM: on_series(_triggered_cam)}

@@ -35,7 +35,8 @@ class FastPath:
         return (self.running and self.controlled and self.state in _PLAIN_STATES and self.after_stop is None
                 and not self.ct_runner.running and not self.events.pending and not self.axis.blocked
                 and not self.par(P_RANGE1_UPID) and not self.pending.armed and self.axis.current_limit_ma is None
-                and self._next_tick is not None and self.s.quiet_cycles)
+                and self._next_tick is not None and self.s.quiet_cycles
+                and not getattr(self.gen, "stepwise", False))   # a plan computed cycle by cycle (stepwise.py)
 
     def _quiet_run(self, t_limit: int, entries: list | None = None, samples: list | None = None) -> bool:
         """Commit quiet cycles from the next tick up to t_limit; True when any ran. It stops before the first

@@ -20,7 +20,9 @@ from ...protocol.upids import (
 )
 from . import vai_variants as VV
 from . import ct_language
+from .curve_modify import modify_curve
 from .setpoints import CurvePlan, StopPlan, VaPlan
+from .stream import stop_streaming, stream_setpoint
 from .units import ACC_RAW, VEL_RAW
 
 Handler = Callable[["Interpreter", CommandDef, dict, int], bool]     # (mc, row, field values, t) -> no error
@@ -200,8 +202,14 @@ HANDLERS: dict[Kind, Handler] = {
     Kind.CT_VARIABLE: ct_language.variable,
     Kind.CT_IF: ct_language.if_jump,
     Kind.VAI_CT_VAR: ct_language.vai_to_variable,
+    Kind.STREAM: stream_setpoint,
+    Kind.STREAM_STOP: stop_streaming,
+    Kind.CURVE_MODIFY: modify_curve,
 }
 
 # the kinds of their own modules (one line each)
-from .encoder_cams import HANDLERS as _CAM_HANDLERS  # noqa: E402
-HANDLERS.update(_CAM_HANDLERS)
+from . import encoder_cams, force_control, position_indexing, winding  # noqa: E402
+HANDLERS.update(encoder_cams.HANDLERS)
+HANDLERS.update(position_indexing.HANDLERS)
+HANDLERS.update(winding.HANDLERS)
+HANDLERS.update(force_control.HANDLERS)

@@ -61,6 +61,31 @@ class MotionSettings:
     # the trajectory record (drive.mc.trajectory): one sample per MC cycle and per event
     record_trajectory: bool = True
 
+    # position indexing (070xh/071xh, [MC] 4.3.69/70 garbled): the target moves by this many pu per master
+    # encoder count counted since the command (INFERRED)
+    position_indexing_pu_per_count: float = 1.0
+
+    # winding (304h/305h adaptation, INFERRED): each stroke's reversal position moves inwards by this per stroke
+    # adapted before it, plus the disturbance amplitude x frac(k x golden ratio) (a varying reversal point
+    # against ribbon patterns); 0: fixed left/right positions
+    winding_adaptation_pu_per_stroke: float = 0.0
+    winding_disturbance_pu: float = 0.0
+
+    # the force sensor (force control 380xh..385xh, [MC] 4.3.217..222; INFERRED model): a contact at this
+    # position (None: nothing to press on), a spring of this stiffness beyond it (pressing towards positive
+    # positions), the measured force with Gaussian noise of this standard deviation (seeded: reproducible)
+    force_contact_pu: int | None = None
+    force_stiffness_n_per_mm: float = 10.0
+    force_noise_n: float = 0.0
+    force_noise_seed: int = 21
+    # the force controller: the demand moves by gain x (target - measured force) per second (pu/(N s)); with
+    # the default stiffness the loop settles with a time constant of 1 / (gain x stiffness) = 20 ms
+    force_control_gain_pu_per_n_s: float = 50_000.0
+    # streams ([MC] 5.4): setpoints received but not yet played that the drive holds; one more is a buffer
+    # overflow (0082h). The manual names the error, not the size: 4 is INFERRED (a strictly cyclic master
+    # keeps 1..2 ahead with the 1.5-period delay)
+    stream_buffer_points: int = 4
+
     # run quiet cycles (plain motion) in a tight loop and ahead of the bus: a speed-up with the same results
     # (tests/test_motion_equivalence.py); False runs every cycle through the generic path
     quiet_cycles: bool = True

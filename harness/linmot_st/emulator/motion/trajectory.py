@@ -2,7 +2,8 @@
 
 One sample per MC cycle while anything moves, and one at each event (a command, a state change), so a
 standing axis costs nothing. Positions in pu (0.1 um), velocities in pu/s. Beside the samples, `io` holds every
-change of the drive's I/O (emulator/linmot/io.py's IoChange: time, pin or "trigger", level or volts).
+change of the drive's I/O (emulator/linmot/io.py's IoChange: time, pin or "trigger", level or volts), and
+`master_counts(t)` the master encoder's counter at any time of the record.
 """
 
 from __future__ import annotations
@@ -36,6 +37,7 @@ class Trajectory:
     def __init__(self) -> None:
         self.samples = []
         self.io: list = []           # IoChange records, in time order (the drive's DriveIO appends them)
+        self.master_encoder = None   # the MC's master encoder (its counter's history: master_counts)
 
     def add(self, sample: Sample) -> None:
         s = self.samples
@@ -79,6 +81,15 @@ class Trajectory:
             found = s
         return found
 
+    def master_counts(self, t_ns: int) -> int:
+        """The master encoder's counter at t_ns (emulator/linmot/master_encoder.py keeps its history)."""
+        return self.master_encoder.counts(t_ns) if self.master_encoder is not None else 0
+
     def columns(self) -> dict[str, list]:
-        """The samples as columns (for plots and numpy)."""
-        return {name: [getattr(s, name) for s in self.samples] for name in Sample._fields}
+        """The samples as columns (for plots and numpy); with a master encoder that was driven, its counter
+        at each sample as `master_counts`."""
+        cols = {name: [getattr(s, name) for s in self.samples] for name in Sample._fields}
+        enc = self.master_encoder
+        if enc is not None and enc.driven:
+            cols["master_counts"] = [enc.counts(s.t_ns) for s in self.samples]
+        return cols

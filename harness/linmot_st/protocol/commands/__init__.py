@@ -24,12 +24,15 @@ from .system import *  # noqa: F401,F403
 from .vai import *  # noqa: F401,F403
 from .curves import *  # noqa: F401,F403
 from .command_table import *  # noqa: F401,F403
-from .encoder_cam import *  # noqa: F401,F403
 from .vai_variants import *  # noqa: F401,F403
 from .system_mc import *  # noqa: F401,F403
 from .ct_language import *  # noqa: F401,F403
 from .io import *  # noqa: F401,F403
 from .triggered import *  # noqa: F401,F403
+from .encoder_cam import *  # noqa: F401,F403
+from .encoder_sync import *  # noqa: F401,F403
+from .streams import *  # noqa: F401,F403
+from .curve_modify import *  # noqa: F401,F403
 
 
 def command_id(header: int) -> int:

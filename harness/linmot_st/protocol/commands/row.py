@@ -30,6 +30,15 @@ class Kind(enum.Enum):
     WAIT = "command-table wait (acts only inside a command-table sequence)"
     ENCODER_CAM = "encoder cam: define, enable/disable, go to sync position, set the counter"
     TRIGGERED_CAM = "encoder cam armed on a trigger edge with delay counts"
+    POSITION_INDEXING = "encoder position indexing: the target follows the master encoder through a VAI"
+    WINDING = "encoder winding: a traverse synchronised to the master's revolutions"
+    FORCE_CONTROL = "VAI motion that changes to force control at a force limit"
+    IO_OUTPUTS = "write interface outputs with a mask"
+    CLEAR_EVENTS = "clear the event handler"
+    ON_TRIGGER = "armed in the event handler, run on every trigger edge until 008xh"
+    VAI_CAPTURED = "VAI to the captured position plus an increment"
+    VAI_ANALOG = "VAI to the position the analog input X4.4 sets"
+    VAI_TRIG_CONFIG = "VAI with the Trig Rise / Trig Fall Config parameters"
     PREDEF_VAI_16BIT = "predefined VAI 16 bit: target in the 16-bit scaling, vmax/acc/dec from parameters"
     VAI_PREDEF_ACC = "VAI predef acc: target and vmax in the command, acc/dec from the predefined parameters"
     VAI_DEC_ACC = "VAI dec=acc: target, vmax and one value for acc and dec (and a max current) in the command"
@@ -40,12 +49,9 @@ class Kind(enum.Enum):
     CT_VARIABLE = "set, add to, store or load a command-table variable"
     CT_IF = "command-table IF: a two-way jump on a condition"
     VAI_CT_VAR = "VAI to the position held in a command-table variable"
-    IO_OUTPUTS = "write interface outputs with a mask"
-    CLEAR_EVENTS = "clear the event handler"
-    ON_TRIGGER = "armed in the event handler, run on every trigger edge until 008xh"
-    VAI_CAPTURED = "VAI to the captured position plus an increment"
-    VAI_ANALOG = "VAI to the position the analog input X4.4 sets"
-    VAI_TRIG_CONFIG = "VAI with the Trig Rise / Trig Fall Config parameters"
+    STREAM = "P / PV / PVA stream setpoint with slave-generated time stamp"
+    STREAM_STOP = "leave the streaming mode"
+    CURVE_MODIFY = "patch a curve's start address, info block or data block in RAM"
 
 
 class Start(enum.Enum):
@@ -148,6 +154,6 @@ def register(*rows: CommandDef) -> None:
     for c in rows:
         if c.cid in COMMANDS:
             raise ValueError(f"motion command {c.cid:03X}h registered twice")
-        if len(c.fields) > 4:
-            raise ValueError(f"{c.cid:03X}h: the ST encoder takes at most 4 parameters (A..D)")
+        if len(c.fields) > 5:
+            raise ValueError(f"{c.cid:03X}h: the ST encoder takes at most 5 parameters (A..E)")
         COMMANDS[c.cid] = c
