@@ -153,13 +153,18 @@ def test_the_master_encoder_parameters_and_signals():
 
 def test_cams_are_e1100_only_and_every_row_is_accepted():
     cam_rows = [c for c in C.COMMANDS.values() if c.kind in (C.Kind.ENCODER_CAM, C.Kind.TRIGGERED_CAM)]
-    assert len(cam_rows) == 26 and all(c.drives == {C.E1100} for c in cam_rows)
+    assert len(cam_rows) == 28 and all(c.drives == {C.E1100} for c in cam_rows)
     link = link_with_cam()
     link.drive.curves.ram[8] = cam_curve([0, 10 * MM, 30 * MM, 60 * MM, 100 * MM], 4000, 8)     # a cam that can be scaled to a target
     mc = link.drive.mc
     for c in cam_rows:
         fields = {n: (8 if n == "curve_id" else 100) for n in c.field_names}
-        link.command(c.cid, 1 * MS, **fields)
+        if c.transport is C.Transport.COMMAND_TABLE:              # 1y3xh: 18 parameter bytes
+            from test_motion_encoder_sync import direct
+            link.advance(1 * MS)
+            direct(link, c.cid, **fields)
+        else:
+            link.command(c.cid, 1 * MS, **fields)
         link.advance(2 * MS)
         assert mc.error_code == 0, f"{c.cid:03X}h: error {mc.error_code:04X}h"
 
@@ -249,3 +254,25 @@ def test_the_counter_and_cam_enabled_over_sdo():
     link.command(C.ENCODER_CAM_ENABLE)
     link.advance(2 * MS)
     assert upload(U.V_CAM_ENABLED) == 1
+
+
+def test_cam_from_a_start_position_to_a_target_in_counts():
+    # 1y3xh ([MC] 4.3.157): the curve scaled from its start position to its target (18 parameter bytes: a
+    # command-table entry on CANopen, here straight into the command interface)
+    from test_motion_encoder_sync import direct
+    link = link_with_cam()
+    mc = link.drive.mc
+    here = round(mc.dem_p)
+    ramp = [0, 10 * MM, 30 * MM, 60 * MM, 100 * MM]
+    link.drive.curves.ram[8] = cam_curve(ramp, 4000, 8)
+    start = here + 2 * MM
+    direct(link, C.cam_command(1, C.CAM_DEFINE_FROM_POS_TO_POS_IN_COUNTS), curve_id=8, start_count=1000,
+           start_pos=start, target=start + 40 * MM, cam_length=2000)
+    link.command(C.cam_command(1, C.CAM_Y_ENABLE), 1 * MS)
+    link.command(C.ENCODER_CAM_ENABLE, 1 * MS)
+    t0 = link.t
+    mc.encoder.drive_with(Recorded([(t0, 1000), (t0 + 400 * MS, 4000)]), t0)
+    link.advance(500 * MS)
+    # from the first cycle after the counter is at the cam's start count (1000) on
+    assert check(link, t0 + MS, link.t, start=1000, offset=start, amp=0.4, length=2000, points=ramp) > 400
+    assert mc.dem_p == pytest.approx(start + 40 * MM) and mc.error_code == 0

@@ -67,3 +67,20 @@ def test_lower_force_limit_changes_to_force_control_when_the_force_falls():
     direct(link, C.FORCE_VAI_LOWER_LIMIT, target=here, vmax=50_000, acc=100_000, force_limit=300)
     link.advance(600 * MS)
     assert force_at(mc.axis.position, contact) == pytest.approx(30.0, abs=HOLD_ERROR)
+
+
+def test_with_target_force_the_limit_starts_force_control_and_the_target_force_is_held():
+    # 383xh ([MC] 4.3.220): force control from a limit of 30 N, then regulating to the command's 60 N
+    link, contact = pressing_link()
+    mc = link.drive.mc
+    here = round(mc.dem_p)
+    direct(link, C.FORCE_VAI_HIGHER_LIMIT_TARGET_FORCE, target=here + 40 * MM, vmax=100_000, acc=100_000,
+           force_limit=300, target_force=600)
+    link.advance(600 * MS)
+    assert force_at(mc.axis.position, contact) == pytest.approx(60.0, abs=HOLD_ERROR)
+    # 385xh: leaving at a lower limit of 40 N, regulating to 20 N
+    direct(link, C.FORCE_VAI_LOWER_LIMIT_TARGET_FORCE, target=here, vmax=50_000, acc=100_000, force_limit=400,
+           target_force=200)
+    link.advance(600 * MS)
+    assert force_at(mc.axis.position, contact) == pytest.approx(20.0, abs=HOLD_ERROR)
+    assert mc.error_code == 0

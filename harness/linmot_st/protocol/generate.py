@@ -171,7 +171,7 @@ def render_codec(commands: Mapping[int, CommandDef] | None = None) -> str:
         "    D : DINT;", "    E : DINT;", "  END_VAR",
         "  VAR_IN_OUT", "    Img : T_LmMotionImage;", "  END_VAR",
         "  VAR", "    N : USINT;", "    Ok : BOOL;", "    I : INT;", "  END_VAR",
-        "  I := 0;", "  WHILE I <= 17 DO", "    Img[I] := 0;", "    I := I + 1;", "  END_WHILE;",
+        "  I := 0;", "  WHILE I <= 19 DO", "    Img[I] := 0;", "    I := I + 1;", "  END_WHILE;",
         "  Ok := F_LmImgPutU16(Img, 0, Cid * 16 + USINT_TO_UINT(Count MOD 16));",
         "  N := 255;",
         "  CASE UINT_TO_INT(Cid) OF",

@@ -157,13 +157,16 @@ def _define(mc, c: CommandDef, f: dict, t: int, key) -> bool:
     here = mc.gen.at(t)[0]
     if "amplitude" in f:
         amp = f["amplitude"] / 1000.0
-    if "target" in f:                                   # from here to the target (1y2h, 1y4h)
+    if "start_pos" in f:                                # 1y3h: from the start position to the target
+        here = f["start_pos"]
+    if "target" in f:                                   # from here to the target (1y2h, 1y3h, 1y4h)
         if y[-1] == y[0]:
             return mc._fail(W.ERR_CURVE_AMP_SCALE, t)
         amp = (f["target"] - here) / (y[-1] - y[0])
     if sub == C.CAM_DEFINE_FROM_ACT_POS:
         here = mc.axis.position
-    if sub in (C.CAM_DEFINE_FROM_ACT_POS, C.CAM_DEFINE_TO_POS, C.CAM_DEFINE_TO_POS_IN_COUNTS):
+    if sub in (C.CAM_DEFINE_FROM_ACT_POS, C.CAM_DEFINE_TO_POS, C.CAM_DEFINE_FROM_POS_TO_POS_IN_COUNTS,
+               C.CAM_DEFINE_TO_POS_IN_COUNTS):
         offset = here - amp * y[0]                     # the motor stands at the cam's start ([MC] 4.3.155)
     if length <= 0 or not -20.0 <= amp <= 20.0:
         return mc._fail(W.ERR_CURVE_AMP_SCALE, t)

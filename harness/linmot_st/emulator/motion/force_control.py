@@ -59,13 +59,15 @@ class ForcePlan(StepwisePlan):
 
     kind = "force"
 
-    def __init__(self, mc, t: int, target: float, vmax: float, acc: float, limit_n: float, higher: bool):
+    def __init__(self, mc, t: int, target: float, vmax: float, acc: float, limit_n: float, higher: bool,
+                 target_force_n: float | None = None):
         p, v, _ = mc.gen.at(t)
         super().__init__(t, p, v, mc.s.cycle_ns)
         self.mc, self.sensor = mc, sensor_of(mc)
         self.move = VaPlan(t, p, v, target, vmax, acc, acc)
         self.target = float(target)
         self.limit, self.higher = limit_n, higher
+        self.force_after_limit = limit_n if target_force_n is None else target_force_n
         self.target_force: float | None = None          # None: still moving in position control
         self.gain = mc.s.force_control_gain_pu_per_n_s
 
@@ -77,7 +79,8 @@ class ForcePlan(StepwisePlan):
         measured = self.sensor.measure(self.mc.axis.position)
         if self.target_force is None:
             if (measured >= self.limit) if self.higher else (measured <= self.limit):
-                self.target_force = self.limit           # [MC] 4.3.217/221: target force = the limit
+                # [MC] 4.3.217/221: the target force is the limit; 4.3.220/222: the command's target force
+                self.target_force = self.force_after_limit
             else:
                 p1, v1, _ = self.move.at(t_ns)
                 return p1, v1
@@ -95,8 +98,10 @@ def _force_control(mc, c: CommandDef, f: dict, t: int) -> bool:
         mc._vai(t, mc.axis.position, mc.axis.velocity, f["target"], f["vmax"] * VEL_RAW, f["acc"] * ACC_RAW,
                 f["dec"] * ACC_RAW)
         return True
+    higher = c.cid in (C.FORCE_VAI_HIGHER_LIMIT, C.FORCE_VAI_HIGHER_LIMIT_TARGET_FORCE)
+    target_force = f["target_force"] / 10.0 if "target_force" in f else None
     mc._start(ForcePlan(mc, t, f["target"], f["vmax"] * VEL_RAW, f["acc"] * ACC_RAW, f["force_limit"] / 10.0,
-                        higher=c.cid == C.FORCE_VAI_HIGHER_LIMIT))
+                        higher=higher, target_force_n=target_force))
     return True
 
 

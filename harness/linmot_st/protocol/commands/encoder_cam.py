@@ -5,8 +5,8 @@ defined from a curve ID and a start count, optionally scaled to a target, an amp
 069xh..06Exh arm a one-shot cam on an edge of the trigger input, after a delay in counts.
 
 No cam motions on the B1100 ([MC] 5.5 "Cam motions are not available in the B1100 drives"): E1100 only.
-1y3xh (Define Curve From Pos To Pos In Counts) has five parameters: the ST encoder takes four, so it is not in
-the catalogue yet (docs/emulator.md).
+1y3xh (Define Curve From Pos To Pos In Counts) has 18 parameter bytes: it travels as a command-table entry and
+needs the 20-byte motion image of the ST encoder.
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ TRIG_CAM_FALL_AMPLITUDE_LENGTH = 0x06E
 
 # the cam-y commands: ID = 0x100 | y << 4 | sub ([MC] 4.3.154..162)
 CAM_DEFINE_DEFAULT, CAM_DEFINE_FROM_ACT_POS, CAM_DEFINE_TO_POS = 0x0, 0x1, 0x2
-CAM_DEFINE_TO_POS_IN_COUNTS, CAM_DEFINE_AMPLITUDE_IN_COUNTS = 0x4, 0x5
+CAM_DEFINE_FROM_POS_TO_POS_IN_COUNTS, CAM_DEFINE_TO_POS_IN_COUNTS, CAM_DEFINE_AMPLITUDE_IN_COUNTS = 0x3, 0x4, 0x5
 CAM_Y_ENABLE, CAM_Y_DISABLE, CAM_Y_CHANGE_AMPLITUDE_LENGTH = 0x6, 0x7, 0x8
 CAMS = (1, 2)
 
@@ -77,6 +77,9 @@ for _y in CAMS:
              (_ID, _START), 155),
         _cam(cam_command(_y, CAM_DEFINE_TO_POS), f"Encoder Cam {_y} Define Curve To Pos", (_ID, _START, _TARGET),
              156),
+        _cam(cam_command(_y, CAM_DEFINE_FROM_POS_TO_POS_IN_COUNTS),
+             f"Encoder Cam {_y} Define Curve From Pos To Pos In Counts",
+             (_ID, _START, Field("start_pos", "DINT", "0.1 um"), _TARGET, _LENGTH), 157),
         _cam(cam_command(_y, CAM_DEFINE_TO_POS_IN_COUNTS), f"Encoder Cam {_y} Define Curve To Pos In Counts",
              (_ID, _START, _TARGET, _LENGTH), 158),
         _cam(cam_command(_y, CAM_DEFINE_AMPLITUDE_IN_COUNTS),

@@ -6,8 +6,8 @@ follow a signal from outside the axis, the master encoder or a force sensor.
 - Winding: 304h, 305h, 310h, 311h from [MC] 4.3.213..216 (headers and 310h/311h's fields only). 300h/301h
   (winding without a curve) are in the seed's TOC only, with no layout: not in the catalogue (every row cites
   [MC] 4.3); the emulator's winding model runs them as 310h/311h without a curve once a source gives them.
-- Force control 380xh..384xh ([MC] 4.3.217..221, "F": the Force Control software key). 383xh/385xh have five
-  parameters (the ST encoder takes four): not in the catalogue yet (docs/emulator.md).
+- Force control 380xh..385xh ([MC] 4.3.217..222, "F": the Force Control software key); 383xh/385xh switch to
+  the command's target force at the limit, the others to the limit itself.
 E1100 only (the B1100 column of [MC] 4.2 has none of them).
 """
 
@@ -27,6 +27,8 @@ FORCE_VAI_HIGHER_LIMIT = 0x380
 FORCE_VAI_FROM_ACT_POS_RESET = 0x381
 FORCE_CHANGE_TARGET_FORCE = 0x382
 FORCE_VAI_LOWER_LIMIT = 0x384
+FORCE_VAI_HIGHER_LIMIT_TARGET_FORCE = 0x383
+FORCE_VAI_LOWER_LIMIT_TARGET_FORCE = 0x385
 
 _V32 = (Field("target", "DINT", "0.1 um"), Field("vmax", "UDINT", "1E-6 m/s"), Field("acc", "UDINT", "1E-5 m/s^2"),
         Field("dec", "UDINT", "1E-5 m/s^2"))
@@ -62,4 +64,10 @@ register(
          "[MC] 4.3.219", homing=False),
     _row(FORCE_VAI_LOWER_LIMIT, "VAI Go To Pos With Lower Force Ctrl Limit",
          _V32[:3] + (Field("force_limit", "INT", "0.1 N"),), _F, "[MC] 4.3.221"),
+    _row(FORCE_VAI_HIGHER_LIMIT_TARGET_FORCE, "VAI Go To Pos With Higher Force Ctrl Limit and Target Force",
+         _V32[:3] + (Field("force_limit", "INT", "0.1 N"), Field("target_force", "INT", "0.1 N")), _F,
+         "[MC] 4.3.220"),
+    _row(FORCE_VAI_LOWER_LIMIT_TARGET_FORCE, "VAI Go To Pos With Lower Force Ctrl Limit and Target Force",
+         _V32[:3] + (Field("force_limit", "INT", "0.1 N"), Field("target_force", "INT", "0.1 N")), _F,
+         "[MC] 4.3.222"),
 )
