@@ -59,7 +59,8 @@ SPECS = [
     # issue 22
     Spec("MVADD", dict(DISTANCE=2.0, **MOVE), dict(DISTANCE=7.0), dict(DECELERATION=0.0)),
     Spec("SETPOS", dict(POSITION=12.5), dict(POSITION=20.0), dict(POSITION=1.0e6)),
-    Spec("CMD", dict(CID=0x090, A=40, B=1000, C=100, D=100), dict(A=90), dict(CID=0x123)),
+    Spec("CMD", dict(CID=0x090, A=40, B=1000, C=100, D=100), dict(A=90),
+         dict(CID=next(c for c in range(0x0F0, 0x1000) if c not in C.COMMANDS))),     # an ID no row has
     Spec("CAMSEL", dict(CAMTABLE=7, CAM=1), dict(CAMTABLE=8), dict(CAMTABLE=101), setup=curves_and_table),
     Spec("CAMOUT", {}, abortable=False),
     Spec("WDO", dict(CONNECTOR="LM_IO_X4", OUTPUTNUMBER=1, VALUE=True), dict(OUTPUTNUMBER=2),

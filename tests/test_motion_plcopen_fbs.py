@@ -197,7 +197,8 @@ def test_raw_command_refused_by_the_drive_reports_its_error():
 def test_raw_command_unknown_or_not_mapped_refused_before_any_frame():
     b = bench()
     t0 = b.plc.time_ns
-    r = b.fb("CMD").run(CID=0x123, max_scans=5)
+    unknown = next(c for c in range(0x0F0, 0x1000) if c not in C.COMMANDS)
+    r = b.fb("CMD").run(CID=unknown, max_scans=5)
     assert r.error and r.error_id == E["UnknownCommand"]
     r = b.fb("CMD").run(CID=0x1234, max_scans=5)
     assert r.error and r.error_id == E["UnknownCommand"]
