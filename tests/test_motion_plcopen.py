@@ -32,6 +32,7 @@ def curves_and_table(b: MotionBench) -> None:
     b.drive.curves.ram[1] = Curve.build(1, [k * k * 100 for k in range(11)], x_length=5000)   # 0 .. 1 mm, 50 ms
     params = C.encode(C.VAI16_INCREMENT_DEM_POS, 0, target=10, vmax=500, acc=100, dec=100)[2:]
     b.drive.ct.ram[5] = build_entry(C.VAI16_INCREMENT_DEM_POS << 4, params)
+    b.drive.curves.ram[7] = Curve.build(7, [0, 10_000, 0], x_length=8000, object_type=0x0103, x_dim=0x001B)   # a cam
 
 
 @dataclass
@@ -55,6 +56,17 @@ SPECS = [
     Spec("CURVE", dict(CURVEID=1), dict(CURVEID=2), dict(CURVEID=101), setup=curves_and_table),
     Spec("CT", dict(ENTRY=5), dict(ENTRY=6), dict(ENTRY=300), setup=curves_and_table),
     Spec("LIVE", dict(UPID=0x13A2, VALUE=20), dict(VALUE=30), dict(UPID=0x5000)),
+    # issue 22
+    Spec("MVADD", dict(DISTANCE=2.0, **MOVE), dict(DISTANCE=7.0), dict(DECELERATION=0.0)),
+    Spec("SETPOS", dict(POSITION=12.5), dict(POSITION=20.0), dict(POSITION=1.0e6)),
+    Spec("CMD", dict(CID=0x090, A=40, B=1000, C=100, D=100), dict(A=90), dict(CID=0x123)),
+    Spec("CAMSEL", dict(CAMTABLE=7, CAM=1), dict(CAMTABLE=8), dict(CAMTABLE=101), setup=curves_and_table),
+    Spec("CAMOUT", {}, abortable=False),
+    Spec("WDO", dict(CONNECTOR="LM_IO_X4", OUTPUTNUMBER=1, VALUE=True), dict(OUTPUTNUMBER=2),
+         dict(OUTPUTNUMBER=20)),
+    Spec("ABORTTRIG", {}),
+    Spec("WPAR", dict(UPID=0x14B0, VALUE=20000), dict(VALUE=30000), dict(UPID=0x5000), frames=(0x601,),
+         abortable=False),
 ]
 IDS = [s.name for s in SPECS]
 
@@ -109,7 +121,7 @@ def test_retrigger_while_busy_is_ignored_and_inputs_are_latched(spec):
     reference = rx_frames(ref, t0, spec.frames)
 
     b = bench(spec)
-    b.bus.delay(lambda f: f.can_id == 0x181, 3 * MS)            # the drive's echo comes late: Busy longer
+    b.bus.delay(lambda f: f.can_id in (0x181, 0x581), 3 * MS)   # the drive's echo (SDO reply) comes late
     fb = b.fb(spec.name)
     fb.set(**spec.inputs)
     t0 = b.plc.time_ns
@@ -127,7 +139,7 @@ def test_invalid_input_error_held_then_reset(spec):
     t0 = b.plc.time_ns
     states = run_recording(b, fb, execute_scans=None)
     assert states[0][2] and states[0][4] != 0 and all(s[2] for s in states)
-    assert rx_frames(b, t0, (0x301, 0x401)) == []
+    assert rx_frames(b, t0, (0x301, 0x401) + spec.frames) == []
     check_reset_on_falling_edge(b, fb)
 
 

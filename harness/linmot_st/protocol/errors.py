@@ -126,6 +126,10 @@ ERRORS: tuple[ErrorDef, ...] = (
     ErrorDef("InvalidCurveTime", 0x0145, "motion: curve time zero, negative or above 21474 s"),
     ErrorDef("InvalidMode", 0x0146, "motion: the Mode or Command input names no known variant"),
     ErrorDef("InvalidBusBudget", 0x0147, "process-data budget: Axes below 1, or a Bitrate that is not a multiple of 1000"),
+    ErrorDef("UnknownCommand", 0x014C, "FB_LmMotionCommand: the command ID is none the encoder knows (the catalogue, F_LmMotionEncode)"),
+    ErrorDef("JogDirection", 0x014D, "FB_LmJog: JogForward and JogBackward both TRUE"),
+    ErrorDef("MotionEnded", 0x014E, "FB_LmMoveVelocity / FB_LmCamIn: the drive ended the infinite motion or the cam operation without a newer command (a position limit)"),
+    ErrorDef("InvalidIoNumber", 0x014F, "digital I/O: the input or output number is not one of the connector's (X4 inputs 0..9 = X4.3..X4.12, X4 outputs 0..8 = X4.3..X4.11, X6 0..15)"),
     # 07xx motion (st_lib/motion): the axis, the process data, the command handshake
     ErrorDef("AxisNotEnabled", 0x0701, "the axis is not in Operation Enabled (state 8): power it with FB_LmPower first"),
     ErrorDef("AxisNotHomed", 0x0702, "the move needs the axis homed (FB_LmHome, or a master homing)"),

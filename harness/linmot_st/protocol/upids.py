@@ -35,6 +35,17 @@ V_DEMAND_VELOCITY = 0x1BAE                                                     #
 V_ACTUAL_VELOCITY = 0x1BAF                                                     # public CANFuck PDO note
 V_CT_VAR1, V_CT_VAR2 = 0x1E72, 0x1E73                                          # [MC] 4.3.124/125
 
+# the master encoder and the encoder cams ([MC] 5.5, 7.3; docs/emulator.md "Master encoder and cams")
+P_MASTER_ENCODER_SOURCE = 0x172A                                     # [MC] 7.3 (0 none, 1 X10, 2 X12)
+P_MASTER_ENCODER_TYPE, P_MASTER_ENCODER_DECODING = 0x128E, 0x128F    # [MC] 7.3
+P_MASTER_ENCODER_DIRECTION, P_MASTER_ENCODER_COUNTS_PER_REV = 0x1290, 0x1291   # [MC] 7.3
+P_MASTER_ENCODER_SPEED_FILTER = 0x1293                               # [MC] 7.3
+P_CAM_MODE, P_CAM_START_ENABLE = 0x1527, 0x1528                      # [MC] 5.5.1/5.5.2
+P_CAM_MODULO_LENGTH = 0x1529                                         # INVENTED ([MC] 5.5.2 names no UPID)
+P_TRIG_CAM_CURVE_RISE, P_TRIG_CAM_CURVE_FALL = 0x154A, 0x154B        # [MC] 4.3.63..68
+P_TRIG_CAM_DELAY_RISE, P_TRIG_CAM_DELAY_FALL = 0x154C, 0x154D        # [MC] 4.3.63..68
+V_CAM_ENABLED = 0x1BA9                                               # [MC] 5.5.2
+V_MASTER_ENCODER_COUNTS, V_MASTER_ENCODER_SPEED = 0x1BA0, 0x1BA1     # INVENTED
 # the drive's I/O (emulator/linmot/io.py) and the triggered commands (emulator/motion/triggered.py)
 P_TRIGGER_MODE = 0x170C                                              # [MC] 7.2.2
 P_TRIG_RISE_INHIBIT, P_TRIG_FALL_INHIBIT = 0x170D, 0x170E            # [MC] 7.2.2.2

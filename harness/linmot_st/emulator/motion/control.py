@@ -29,6 +29,7 @@ from .events import EventHandler
 from . import triggered  # noqa: F401 (registers the I/O and triggered commands' handlers)
 from .fast_path import FastPath
 from .interpreter import Interpreter
+from ..linmot.master_encoder import MasterEncoder
 from .pending import PendingMotions
 from .settings import MotionSettings
 from .setpoints import Hold
@@ -52,6 +53,7 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
         self.ct_runner = CtRunner(self)
         self.pending = PendingMotions()           # the queued motion and position transition (pending.py)
         self.on_reset: Callable[[int], None] | None = None   # 00Fxh: the drive restarts (set by the drive)
+        self.encoder = MasterEncoder(self.par, self.sync)      # the master encoder input ([MC] 7.3)
         self.events = EventHandler(self)
         self.io = None                      # the drive's I/O (emulator/linmot/io.py), set by the drive
         self.running = False

@@ -201,3 +201,7 @@ HANDLERS: dict[Kind, Handler] = {
     Kind.CT_IF: ct_language.if_jump,
     Kind.VAI_CT_VAR: ct_language.vai_to_variable,
 }
+
+# the kinds of their own modules (one line each)
+from .encoder_cams import HANDLERS as _CAM_HANDLERS  # noqa: E402
+HANDLERS.update(_CAM_HANDLERS)

@@ -15,6 +15,7 @@ from ...protocol.upids import (
     V_CT_VAR1, V_CT_VAR2,
     V_CAPTURED_POSITION, V_X4_INPUTS, V_X4_OUTPUTS, V_X6_OUTPUTS, V_ANALOG_X4_4,
 )
+from .encoder_cams import sync_variable
 from .trajectory import Sample
 from .units import VEL_RAW
 
@@ -191,7 +192,7 @@ class StatusWords:
                 return io.outputs("X6")
             if upid == V_ANALOG_X4_4:
                 return _s16(io.analog() * 1000)
-        return None
+        return sync_variable(self, upid)        # master encoder, cams, force (encoder_cams.py)
 
     def _record(self, t: int) -> None:
         """After an event or a cycle: the outputs are brought up to date, the trajectory gets a sample."""

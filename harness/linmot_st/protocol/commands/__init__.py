@@ -27,6 +27,7 @@ from .command_table import *  # noqa: F401,F403
 from .vai_variants import *  # noqa: F401,F403
 from .system_mc import *  # noqa: F401,F403
 from .ct_language import *  # noqa: F401,F403
+from .encoder_cam import *  # noqa: F401,F403
 from .io import *  # noqa: F401,F403
 from .triggered import *  # noqa: F401,F403
 

@@ -38,6 +38,8 @@ class Kind(enum.Enum):
     CT_VARIABLE = "set, add to, store or load a command-table variable"
     CT_IF = "command-table IF: a two-way jump on a condition"
     VAI_CT_VAR = "VAI to the position held in a command-table variable"
+    ENCODER_CAM = "encoder cam: define, enable/disable, go to sync position, set the counter"
+    TRIGGERED_CAM = "encoder cam armed on a trigger edge with delay counts"
     IO_OUTPUTS = "write interface outputs with a mask"
     CLEAR_EVENTS = "clear the event handler"
     ON_TRIGGER = "armed in the event handler, run on every trigger edge until 008xh"
