@@ -33,8 +33,8 @@ def build(pvl):
 
 def test_plan_from_the_example(pvl):
     p = plan(pvl, 40.0)
-    assert [s.kind for s in p.steps] == ["setup", "power", "home", "move", "move", "curve", "move", "curve", "ct",
-                                         "stop", "off"]
+    assert [s.kind for s in p.steps] == ["setup", "power", "home", "move", "jog", "jog", "velocity", "stop", "move",
+                                         "curve", "move", "curve", "ct", "stop", "off"]
     assert p.steps[3].target_mm == 40.0
     curves = [s for s in p.steps if s.kind == "curve"]
     assert [s.curve_id for s in curves] == [23, 1]
@@ -98,7 +98,7 @@ def test_motion_command_writes_the_reports(tmp_path, capsys):
     assert "motion job: PASSED" in out.out and "not run: curve 2 Sine_Cam_5mm" in out.out
     assert "axis 1: step 3 home (MC_Home)" in out.err
     fig = json.loads((report / "motion.json").read_text())
-    assert fig["passed"] and len(fig["rows"]) == 22 and all(r["ok"] for r in fig["rows"])
+    assert fig["passed"] and len(fig["rows"]) == 30 and all(r["ok"] for r in fig["rows"])
     assert fig["rows"][3]["label"] == "move to 30 mm"
     for name in ("report.md", "report.json", "can.log", "motion.md", "motion-axis1.png", "motion-axis2.png"):
         assert (report / name).exists(), name
@@ -135,3 +135,39 @@ def test_motion_job_on_python_can_virtual_bus(pvl, build):
     ax = res.after.axes[0]
     assert [r.index for r in ax.steps] == list(range(1, len(p.steps) + 1))       # every step, in order
     assert len(res.check.steps) == len(p.steps)
+
+
+def test_jog_and_velocity_steps_on_two_axes(pvl, build):
+    p = plan(pvl)
+    res = run_job(pvl, RunOptions(axes=2, timings="fast"), build, p)
+    chk = check_motion(res.after, p, res.drives)
+    by = {(s.axis, s.index): s for s in chk.steps}
+    kinds = [s.kind for s in p.steps]
+    jf, jb, vel = kinds.index("jog"), kinds.index("jog") + 1, kinds.index("velocity")
+    for axis, node in ((1, 1), (2, 2)):
+        assert all(by[(axis, k + 1)].ok for k in (jf, jb, vel, vel + 1)), [by[(axis, k + 1)].what for k in range(15)]
+        # on the trajectory: forward at the jog velocity, back, then at the velocity, then stopped
+        traj = res.drives[node].mc.trajectory
+        recs = {r.index: r for r in res.after.axes[axis - 1].steps}
+        fwd = traj.between(recs[jf + 1].t0_ns, recs[jf + 1].t1_ns)
+        back = traj.between(recs[jb + 1].t0_ns, recs[jb + 1].t1_ns)
+        assert max(s.demand_velocity for s in fwd) == pytest.approx(50 * 10_000, rel=1e-3)
+        assert min(s.demand_velocity for s in back) == pytest.approx(-50 * 10_000, rel=1e-3)
+        assert fwd[-1].actual - fwd[0].actual > 10 * 10_000 and back[-1].actual - back[0].actual < -10 * 10_000
+        stop = traj.at(recs[vel + 2].t1_ns)
+        assert stop.demand_velocity == 0
+    # the RAM parameters MC_Jog / MC_MoveVelocity wrote are listed (the commissioning is checked without them)
+    assert set(res.after.ram_changed[1]) >= {0x14BE, 0x14BF}
+
+
+def test_a_jog_the_wrong_way_fails_with_the_figures(pvl, build):
+    import dataclasses
+    p = plan(pvl)
+    k = [s.kind for s in p.steps].index("jog")
+    wrong = dataclasses.replace(p, steps=list(p.steps))
+    wrong.steps[k] = dataclasses.replace(p.steps[k], velocity=-p.steps[k].velocity)   # the PLC jogs back
+    res = run_job(pvl, RunOptions(axes=2, timings="fast"), build, wrong)
+    chk = check_motion(res.after, p, res.drives)                   # checked against the jog forward
+    bad = [s for s in chk.steps if not s.ok]
+    assert {(s.axis, s.index) for s in bad} == {(1, k + 1), (2, k + 1)}
+    assert "forward (command 50" in bad[0].what and "moved -" in bad[0].what

@@ -5,7 +5,12 @@ record and the bus trace, with the expectations of plan.py (the PVL as written):
 - curve: from the moment the drive took the curve command (its record of executed commands; on the simulated
   bus that is the end of the command's RxPDO3, tests/test_motion_job.py checks it) over the curve time, the demand position follows the curve as written within CURVE_DEMAND_TOLERANCE_MM and the actual
   position within CURVE_ACTUAL_TOLERANCE_MM (the following error);
-- home: the drive is homed; power: Operation Enabled; off: switched off; setup, stop: done.
+- jog: over the step the demand velocity reached the jog velocity (within VELOCITY_TOLERANCE) in the jog's
+  direction, the axis moved that way, and at the end it stands still (the jog input fell);
+- velocity: over the step the demand velocity reached the command in its direction and it still runs at it at
+  the end of the step (the velocity is kept until the next step, a stop);
+- stop: at its end the demand velocity is 0;
+- home: the drive is homed; power: Operation Enabled; off: switched off; setup: done.
 """
 
 from __future__ import annotations
@@ -16,7 +21,8 @@ from dataclasses import dataclass, field
 from linmot_st.protocol import commands as C
 from linmot_st.protocol import words as W
 
-from .plan import (CURVE_ACTUAL_TOLERANCE_MM, CURVE_DEMAND_TOLERANCE_MM, MM, POSITION_TOLERANCE_MM, Plan)
+from .plan import (CURVE_ACTUAL_TOLERANCE_MM, CURVE_DEMAND_TOLERANCE_MM, MM, POSITION_TOLERANCE_MM,
+                   VELOCITY_TOLERANCE, Plan)
 
 
 @dataclass
@@ -83,6 +89,12 @@ def check_motion(result, plan: Plan, drives: dict) -> MotionCheck:
                                            f"(tolerance {POSITION_TOLERANCE_MM} mm)", reached_mm=reached))
             elif step.kind == "curve":
                 out.steps.append(_check_curve(ax, rec, step, drive))
+            elif step.kind in ("jog", "velocity"):
+                out.steps.append(_check_velocity(ax, rec, step, traj, end))
+            elif step.kind == "stop":
+                s = next((s for s in around if s.demand_velocity == 0), end)
+                out.steps.append(StepCheck(ax.axis, rec.index, "stop", s.demand_velocity == 0,
+                                           f"demand velocity {s.demand_velocity / MM:g} mm/s at the end"))
             elif step.kind == "home":
                 ok = any(s.status_word & W.SW_HOMED for s in around)
                 out.steps.append(StepCheck(ax.axis, rec.index, "home", ok, "homed" if ok else "not homed"))
@@ -113,3 +125,28 @@ def _check_curve(ax, rec, step, drive) -> StepCheck:
                      f"demand within {dem:.4f} mm of the curve as written (tolerance {CURVE_DEMAND_TOLERANCE_MM}), "
                      f"actual within {act:.3f} mm (tolerance {CURVE_ACTUAL_TOLERANCE_MM}), {len(samples)} samples",
                      demand_dev_mm=dem, actual_dev_mm=act, t_exec_ns=t_exec - rec.off0_ns)
+
+
+def _check_velocity(ax, rec, step, traj, end) -> StepCheck:
+    """A jog or a velocity move: the peak demand velocity in the step's direction against the command; the
+    distance moved; a jog stands still at its end, a velocity move still runs at the command."""
+    samples = traj.between(rec.t0_ns + rec.off0_ns, rec.t1_ns + rec.off1_ns)
+    if not samples:
+        return StepCheck(ax.axis, rec.index, step.kind, False, "no trajectory samples over the step")
+    sign = 1 if step.velocity > 0 else -1
+    want = abs(step.velocity)
+    peak = max(sign * s.demand_velocity for s in samples) / MM
+    moved = sign * (end.actual - samples[0].actual) / MM
+    reached = abs(peak - want) <= VELOCITY_TOLERANCE * want
+    if step.kind == "jog":
+        ended = end.demand_velocity == 0
+        ok = reached and moved > 0 and ended
+        tail = "at standstill at the end" if ended else f"still at {end.demand_velocity / MM:g} mm/s at the end"
+    else:
+        ended = abs(sign * end.demand_velocity / MM - want) <= VELOCITY_TOLERANCE * want
+        ok = reached and moved > 0 and ended
+        tail = f"{'still' if ended else 'no longer'} at it at the end ({end.demand_velocity / MM:g} mm/s)"
+    direction = "forward" if sign > 0 else "back"
+    return StepCheck(ax.axis, rec.index, step.kind, ok,
+                     f"peak demand velocity {peak:.2f} mm/s {direction} (command {want:g}, tolerance "
+                     f"{VELOCITY_TOLERANCE:.0%}), moved {moved:+.3f} mm {direction}, {tail}", reached_mm=end.actual / MM)

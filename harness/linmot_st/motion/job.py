@@ -9,6 +9,7 @@ plc_project's motion steps on every axis (plc_project/motion.st), sampled scan b
 from __future__ import annotations
 
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 from linmot_st.commission.project import INSTANCE
@@ -69,6 +70,9 @@ class MotionResult:
     clock_margin_ns: int = 0                            # how far that offset may be off (real time)
     inhibit_100us: int = 0                              # TxPDO2's inhibit time the bus budget chose
     bus_load: tuple | None = None                       # (mean, peak of 100 ms) load after the PDO setup (sim)
+    # emulated drives: parameters whose RAM value the steps changed (MC_Jog and MC_MoveVelocity write the
+    # predefined VA interpolator's 14B0h..14C0h): node -> {upid: (RAM before the motion, after)}
+    ram_changed: dict = field(default_factory=dict)
 
     @property
     def finished(self) -> bool:
@@ -126,7 +130,7 @@ def _write_steps(plc, plan: Plan, inhibit_100us: int = 0) -> None:
     # every step carries the TxPDO2 inhibit time of the bus budget (linmot_st.motion.budget); SETUP uses it
     values = [{**s.plc_value(), "INHIBIT100US": inhibit_100us} for s in plan.steps]
     blank = {"KIND": "PLC_STEP_NONE", "POSITION": 0.0, "VELOCITY": 0.0, "ACCELERATION": 0.0, "CURVEID": 0,
-             "ENTRY": 0, "INHIBIT100US": 0}
+             "ENTRY": 0, "INHIBIT100US": 0, "HOLD": 0}
     plc[f"{INSTANCE}.STEPS"] = values + [blank] * (MAX_STEPS - len(values))
     plc[f"{INSTANCE}.NSTEPS"] = len(values)
 
@@ -150,6 +154,8 @@ def motion_phase(plan: Plan, timeout_s: float, progress=None, inhibit_100us: int
                 # time axis; the checks use each step's own readings, StepRecord.off0_ns / off1_ns)
                 result.clock_offsets[n] = now - plc.time_ns
                 result.clock_margin_ns = 5 * plc.tick_ns
+        ram0 = {n: {u: p.ram for u, p in d.params.by_upid.items()} for n, d in drives.items()
+                if hasattr(d, "params")}
         wall0 = time.perf_counter()
         try:
             sim.run_until(sampler, max_scans=int(timeout_s * 1e9 // plc.tick_ns))
@@ -158,6 +164,11 @@ def motion_phase(plan: Plan, timeout_s: float, progress=None, inhibit_100us: int
         result.wall_s = time.perf_counter() - wall0
         result.t1_ns, result.scans = plc.time_ns, sampler.scans
         result.inhibit_100us = inhibit_100us
+        for n, before in ram0.items():
+            params = drives[n].params.by_upid
+            changed = {u: (v, params[u].ram) for u, v in before.items() if params[u].ram != v}
+            if changed:
+                result.ram_changed[n] = changed
         bus = getattr(sim, "bus", None)
         if getattr(bus, "trace", None) is not None and hasattr(bus, "bit_ns"):
             from .budget import measured_load
@@ -173,6 +184,24 @@ def motion_phase(plan: Plan, timeout_s: float, progress=None, inhibit_100us: int
         return result
 
     return after
+
+
+@contextmanager
+def as_commissioned(result: RunResult):
+    """While inside, the emulated drives' RAM holds what the commissioning left there: the commissioning's
+    memory check is of the commissioning, not of the parameters the motion steps wrote since (their list:
+    MotionResult.ram_changed, printed by the job)."""
+    m = result.after
+    changed = m.ram_changed if m is not None else {}
+    for n, ps in changed.items():
+        for u, (before, _) in ps.items():
+            result.drives[n].params.by_upid[u].ram = before
+    try:
+        yield
+    finally:
+        for n, ps in changed.items():
+            for u, (_, after) in ps.items():
+                result.drives[n].params.by_upid[u].ram = after
 
 
 def placed_drives(stroke, opts: RunOptions):

@@ -1,8 +1,8 @@
 """The steps of the motion job, from a PVL file: what plc_project's motion program (plc_project/motion.st)
 runs on every commissioned axis, and what each step must achieve (docs/motion.md, "The motion job").
 
-    set up the PDOs -> power -> home -> move to a position -> for each time curve: move to its start, run
-    it -> start a command-table entry -> stop -> switch off
+    set up the PDOs -> power -> home -> move to a position -> jog forward, jog back -> a velocity move, its
+    stop -> for each time curve: move to its start, run it -> start a command-table entry -> stop -> switch off
 
 The expectations are computed here from the PVL file (the curves as written, the command table's targets),
 not taken from the emulated drive.
@@ -26,10 +26,18 @@ STOP_DECELERATION = 5000.0
 POSITION_TOLERANCE_MM = 0.1     # the emulated drive's in-target window
 CURVE_DEMAND_TOLERANCE_MM = 0.001
 CURVE_ACTUAL_TOLERANCE_MM = 0.5
+JOG_VELOCITY = 50.0             # mm/s
+JOG_ACCELERATION = 1000.0       # mm/s^2 (and deceleration)
+JOG_HOLD_MS = 300               # the jog input held this long
+VELOCITY = 100.0                # mm/s, MC_MoveVelocity
+VELOCITY_ACCELERATION = 2000.0
+VELOCITY_HOLD_MS = 200          # kept this long once InVelocity, then stopped
+VELOCITY_TOLERANCE = 0.01       # the demand velocity reached: within 1 % of the command
+VELOCITY_SLACK_S = 0.1          # the span's margin for the PLC's handshakes and InVelocity's SDO reads
 
 STEP_KINDS = {"setup": "PLC_STEP_SETUP", "power": "PLC_STEP_POWER", "home": "PLC_STEP_HOME",
               "move": "PLC_STEP_MOVE", "curve": "PLC_STEP_CURVE", "ct": "PLC_STEP_CT", "stop": "PLC_STEP_STOP",
-              "off": "PLC_STEP_OFF"}
+              "off": "PLC_STEP_OFF", "jog": "PLC_STEP_JOG", "velocity": "PLC_STEP_VELOCITY"}
 
 
 @dataclass
@@ -65,10 +73,14 @@ class Step:
     curve: CurveRun | None = None
     chain: list[int] = field(default_factory=list)   # CT: the entries the sequence runs
     span_mm: tuple[float, float] | None = None       # the lowest and highest position the step visits
+    hold_ms: int = 0                                 # jog, velocity: T_PlcStep.Hold
+    reach_mm: tuple[float, float] | None = None      # jog, velocity: how far back / forward it may go from
+                                                     # where the step starts (no target: a bound)
 
     def plc_value(self) -> dict:
         return {"KIND": STEP_KINDS[self.kind], "POSITION": self.position_mm, "VELOCITY": self.velocity,
-                "ACCELERATION": self.acceleration, "CURVEID": self.curve_id, "ENTRY": self.entry}
+                "ACCELERATION": self.acceleration, "CURVEID": self.curve_id, "ENTRY": self.entry,
+                "HOLD": self.hold_ms * 1_000_000}
 
 
 @dataclass
@@ -118,6 +130,7 @@ def plan(pvl, position_mm: float = 50.0, settings=None) -> Plan:
     move = dict(velocity=MOVE_VELOCITY, acceleration=MOVE_ACCELERATION)
     steps.append(Step("move", f"move to {position_mm:g} mm", position_mm=position_mm, target_mm=position_mm,
                       **move))
+    steps += _jog_and_velocity()
     offset = _param(pvl, P_CURVE_OFFSET, 0)
     time_scale = _param(pvl, P_CURVE_TIME_SCALE, 10000)
     amplitude = _param(pvl, P_CURVE_AMPLITUDE, 1000) / 1000.0
@@ -159,13 +172,34 @@ def plan(pvl, position_mm: float = 50.0, settings=None) -> Plan:
     return Plan(steps, not_run, fit(pvl, spans, settings))
 
 
+def _jog_and_velocity() -> list[Step]:
+    """Jog forward, jog back (MC_Jog held JOG_HOLD_MS), a velocity move kept VELOCITY_HOLD_MS (MC_MoveVelocity)
+    and the stop that ends it; each bounded by how far it can go: the hold at full speed plus the ramp down
+    (the velocity move also its ramp up and the PLC's slack)."""
+    jog = JOG_VELOCITY * JOG_HOLD_MS / 1000 + JOG_VELOCITY ** 2 / (2 * JOG_ACCELERATION)
+    vel = (VELOCITY ** 2 / (2 * VELOCITY_ACCELERATION) + VELOCITY * (VELOCITY_HOLD_MS / 1000 + VELOCITY_SLACK_S)
+           + VELOCITY ** 2 / (2 * STOP_DECELERATION))
+    return [Step("jog", f"jog forward at {JOG_VELOCITY:g} mm/s for {JOG_HOLD_MS} ms (MC_Jog)",
+                 velocity=JOG_VELOCITY, acceleration=JOG_ACCELERATION, hold_ms=JOG_HOLD_MS, reach_mm=(0.0, jog)),
+            Step("jog", f"jog back at {JOG_VELOCITY:g} mm/s for {JOG_HOLD_MS} ms (MC_Jog)",
+                 velocity=-JOG_VELOCITY, acceleration=JOG_ACCELERATION, hold_ms=JOG_HOLD_MS, reach_mm=(-jog, 0.0)),
+            Step("velocity", f"move at {VELOCITY:g} mm/s for {VELOCITY_HOLD_MS} ms (MC_MoveVelocity)",
+                 velocity=VELOCITY, acceleration=VELOCITY_ACCELERATION, hold_ms=VELOCITY_HOLD_MS,
+                 reach_mm=(0.0, vel)),
+            Step("stop", "stop the velocity move (MC_Stop)", acceleration=STOP_DECELERATION)]
+
+
 def _spans(steps: list[Step]) -> None:
     """Each move's span: from where the previous step left the axis to its target (the first from its target:
-    homing left the axis inside the stroke); a CT sequence from there over its targets."""
-    here = None
+    homing left the axis inside the stroke); a CT sequence from there over its targets; a jog or velocity move
+    from where the axis may be (an interval: they have no target) over how far it may go."""
+    here = None                     # (lowest, highest) where the axis may be
     for s in steps:
         if s.kind == "move" or (s.kind == "ct" and s.span_mm is not None):
-            pts = [s.target_mm] + ([here] if here is not None else []) + (list(s.span_mm) if s.span_mm else [])
+            pts = [s.target_mm] + (list(here) if here is not None else []) + (list(s.span_mm) if s.span_mm else [])
             s.span_mm = (min(pts), max(pts))
+        elif s.reach_mm is not None and here is not None:
+            s.span_mm = (here[0] + s.reach_mm[0], here[1] + s.reach_mm[1])
+            here = s.span_mm
         if s.target_mm is not None:
-            here = s.target_mm
+            here = (s.target_mm, s.target_mm)
