@@ -33,8 +33,8 @@ def build(pvl):
 
 def test_plan_from_the_example(pvl):
     p = plan(pvl, 40.0)
-    assert [s.kind for s in p.steps] == ["setup", "power", "home", "move", "jog", "jog", "velocity", "stop", "move",
-                                         "curve", "move", "curve", "ct", "stop", "off"]
+    assert [s.kind for s in p.steps] == ["setup", "power", "home", "move", "jog", "jog", "velocity", "stop",
+                                         "trigger", "probe", "move", "curve", "move", "curve", "ct", "stop", "off"]
     assert p.steps[3].target_mm == 40.0
     curves = [s for s in p.steps if s.kind == "curve"]
     assert [s.curve_id for s in curves] == [23, 1]
@@ -98,7 +98,7 @@ def test_motion_command_writes_the_reports(tmp_path, capsys):
     assert "motion job: PASSED" in out.out and "not run: curve 2 Sine_Cam_5mm" in out.out
     assert "axis 1: step 3 home (MC_Home)" in out.err
     fig = json.loads((report / "motion.json").read_text())
-    assert fig["passed"] and len(fig["rows"]) == 30 and all(r["ok"] for r in fig["rows"])
+    assert fig["passed"] and len(fig["rows"]) == 34 and all(r["ok"] for r in fig["rows"])
     assert fig["rows"][3]["label"] == "move to 30 mm"
     for name in ("report.md", "report.json", "can.log", "motion.md", "motion-axis1.png", "motion-axis2.png"):
         assert (report / name).exists(), name
@@ -145,7 +145,8 @@ def test_jog_and_velocity_steps_on_two_axes(pvl, build):
     kinds = [s.kind for s in p.steps]
     jf, jb, vel = kinds.index("jog"), kinds.index("jog") + 1, kinds.index("velocity")
     for axis, node in ((1, 1), (2, 2)):
-        assert all(by[(axis, k + 1)].ok for k in (jf, jb, vel, vel + 1)), [by[(axis, k + 1)].what for k in range(15)]
+        assert all(by[(axis, k + 1)].ok for k in (jf, jb, vel, vel + 1, vel + 2, vel + 3)), \
+            [by[(axis, k + 1)].what for k in range(len(p.steps))]
         # on the trajectory: forward at the jog velocity, back, then at the velocity, then stopped
         traj = res.drives[node].mc.trajectory
         recs = {r.index: r for r in res.after.axes[axis - 1].steps}
@@ -171,3 +172,37 @@ def test_a_jog_the_wrong_way_fails_with_the_figures(pvl, build):
     bad = [s for s in chk.steps if not s.ok]
     assert {(s.axis, s.index) for s in bad} == {(1, k + 1), (2, k + 1)}
     assert "forward (command 50" in bad[0].what and "moved -" in bad[0].what
+
+
+def test_trigger_and_probe_steps_follow_the_edges_the_job_raises(pvl, build):
+    p = plan(pvl)
+    res = run_job(pvl, RunOptions(axes=2, timings="fast"), build, p)
+    kinds = [s.kind for s in p.steps]
+    trig, probe = kinds.index("trigger") + 1, kinds.index("probe") + 1
+    for ax in res.after.axes:
+        recs = {r.index: r for r in ax.steps}
+        drive = res.drives[ax.node_id]
+        traj = drive.mc.trajectory
+        edge = recs[trig].edge_ns
+        # armed, then still until the edge on X4.6, at the target after it
+        assert recs[trig].t0_ns < edge < recs[trig].t1_ns
+        assert all(s.demand_velocity == 0 for s in traj.between(recs[trig].t0_ns, edge))
+        assert abs(traj.at(recs[trig].t1_ns).actual / 10_000 - 60.0) <= 0.1
+        # the PLC's capture is the drive's 1E62h and the actual position at the X4.5 edge
+        pedge = recs[probe].edge_ns
+        assert recs[probe].probed_mm == pytest.approx(traj.at(pedge).actual / 10_000, abs=1e-4)
+        assert drive.io.input("X4.5") == 0 and drive.io.input("X4.6") == 0      # the pulses ended
+    assert check_motion(res.after, p, res.drives).passed
+
+
+def test_a_trigger_never_raised_fails_with_a_readable_message(pvl, build):
+    p = plan(pvl)
+    res = run_job(pvl, RunOptions(axes=2, timings="fast"), build, p, toggle_inputs=False, timeout_s=3.0)
+    m = res.after
+    assert m.timed_out and not m.finished
+    chk = check_motion(m, p, res.drives)
+    k = [s.kind for s in p.steps].index("trigger") + 1
+    for axis in (1, 2):
+        bad = [s for s in chk.steps if s.axis == axis and not s.ok]
+        assert [s.what for s in bad] == ["the motion program did not finish", bad[1].what]
+        assert bad[1].index == k and bad[1].what.startswith("no edge on X4.6: the job never raised the input")

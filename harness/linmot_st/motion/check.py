@@ -10,6 +10,10 @@ record and the bus trace, with the expectations of plan.py (the PVL as written):
 - velocity: over the step the demand velocity reached the command in its direction and it still runs at it at
   the end of the step (the velocity is kept until the next step, a stop);
 - stop: at its end the demand velocity is 0;
+- trigger: the axis did not move from the step's start to the edge the job raised on X4.6, then moved to the
+  target (within POSITION_TOLERANCE_MM at the end);
+- probe: the position the PLC read equals the actual position at the edge the job raised on X4.5 (within
+  CAPTURE_TOLERANCE_MM);
 - home: the drive is homed; power: Operation Enabled; off: switched off; setup: done.
 """
 
@@ -21,8 +25,8 @@ from dataclasses import dataclass, field
 from linmot_st.protocol import commands as C
 from linmot_st.protocol import words as W
 
-from .plan import (CURVE_ACTUAL_TOLERANCE_MM, CURVE_DEMAND_TOLERANCE_MM, MM, POSITION_TOLERANCE_MM,
-                   VELOCITY_TOLERANCE, Plan)
+from .plan import (CAPTURE_TOLERANCE_MM, CURVE_ACTUAL_TOLERANCE_MM, CURVE_DEMAND_TOLERANCE_MM, MM,
+                   POSITION_TOLERANCE_MM, VELOCITY_TOLERANCE, Plan)
 
 
 @dataclass
@@ -77,6 +81,13 @@ def check_motion(result, plan: Plan, drives: dict) -> MotionCheck:
             off = rec.off1_ns
             end = traj.at(rec.t1_ns + off)
             around = [end] + traj.between(rec.t1_ns + off - margin, rec.t1_ns + off + margin) if margin else [end]
+            if step.kind in ("trigger", "probe") and not rec.edge_ns and not rec.error_id:
+                pin = "X4.6" if step.kind == "trigger" else "X4.5"
+                out.steps.append(StepCheck(ax.axis, rec.index, step.kind, False,
+                                           f"no edge on {pin}: the job never raised the input, the armed "
+                                           f"{'move' if step.kind == 'trigger' else 'capture'} waited "
+                                           f"(at {end.actual / MM:.3f} mm)", reached_mm=end.actual / MM))
+                continue
             if not rec.ok:
                 out.steps.append(StepCheck(ax.axis, rec.index, rec.kind, False, f"failed: ErrorID 16#{rec.error_id:04X}"
                                            + (f", drive error {rec.drive_error:04X}h" if rec.drive_error else "")))
@@ -89,6 +100,16 @@ def check_motion(result, plan: Plan, drives: dict) -> MotionCheck:
                                            f"(tolerance {POSITION_TOLERANCE_MM} mm)", reached_mm=reached))
             elif step.kind == "curve":
                 out.steps.append(_check_curve(ax, rec, step, drive))
+            elif step.kind == "trigger":
+                out.steps.append(_check_trigger(ax, rec, step, traj, end))
+            elif step.kind == "probe":
+                at = traj.at(rec.edge_ns).actual / MM
+                got = rec.probed_mm
+                ok = got is not None and abs(got - at) <= CAPTURE_TOLERANCE_MM
+                out.steps.append(StepCheck(ax.axis, rec.index, "probe", ok,
+                                           f"captured {got if got is None else f'{got:.4f}'} mm, actual position at "
+                                           f"the edge {at:.4f} mm (tolerance {CAPTURE_TOLERANCE_MM} mm)",
+                                           reached_mm=got))
             elif step.kind in ("jog", "velocity"):
                 out.steps.append(_check_velocity(ax, rec, step, traj, end))
             elif step.kind == "stop":
@@ -150,3 +171,18 @@ def _check_velocity(ax, rec, step, traj, end) -> StepCheck:
     return StepCheck(ax.axis, rec.index, step.kind, ok,
                      f"peak demand velocity {peak:.2f} mm/s {direction} (command {want:g}, tolerance "
                      f"{VELOCITY_TOLERANCE:.0%}), moved {moved:+.3f} mm {direction}, {tail}", reached_mm=end.actual / MM)
+
+
+def _check_trigger(ax, rec, step, traj, end) -> StepCheck:
+    """Still until the edge (no demand velocity between the step's start and the edge), then at the target."""
+    before = traj.between(rec.t0_ns + rec.off0_ns, rec.edge_ns)
+    early = next((s for s in before if s.demand_velocity != 0), None)
+    reached = end.actual / MM
+    at = abs(reached - step.target_mm) <= POSITION_TOLERANCE_MM
+    ok = early is None and at
+    first = ("moved before the edge (demand velocity "
+             f"{early.demand_velocity / MM:g} mm/s {(rec.edge_ns - early.t_ns) / 1e6:.1f} ms before it)"
+             if early is not None else "still until the edge on X4.6")
+    return StepCheck(ax.axis, rec.index, "trigger", ok,
+                     f"{first}, then at {reached:.3f} mm, target {step.target_mm:g} mm "
+                     f"(tolerance {POSITION_TOLERANCE_MM} mm)", reached_mm=reached)

@@ -16,7 +16,13 @@ from linmot_st.commission.project import INSTANCE
 from linmot_st.commission.runner import RunOptions, RunResult, run
 from linmot_st.cosim import IdlePredicate
 
-from .plan import MAX_STEPS, Plan
+from linmot_st.protocol.upids import P_TRIGGER_MODE
+
+from .plan import INPUT_EDGE_DELAY_MS, INPUT_PULSE_MS, MAX_STEPS, Plan
+
+MS = 1_000_000
+TRIGGER_MODE_DIRECT = 1         # 170Ch: the trigger input's edges as they come ([MC] 7.2.2)
+INPUT_OF_STEP = {"trigger": "X4.6", "probe": "X4.5"}     # the emulated input the job toggles in the step
 
 
 @dataclass
@@ -35,6 +41,8 @@ class StepRecord:
     # scan, so the drive's state then is at least what the PLC saw); 0 in virtual time (one clock)
     off0_ns: int = 0
     off1_ns: int = 0
+    edge_ns: int = 0            # trigger, probe: when the job raised the input (the drive's clock)
+    probed_mm: float | None = None      # probe: the position the PLC read
 
     @property
     def scans(self) -> int:
@@ -82,15 +90,18 @@ class MotionResult:
 class MotionSampler(IdlePredicate):
     """Reads each axis' StepNo and end flags after every scan; records step boundaries; tells progress."""
 
-    def __init__(self, plc, node_ids: list[int], plan: Plan, progress=None, drives: dict | None = None):
+    def __init__(self, plc, node_ids: list[int], plan: Plan, progress=None, drives: dict | None = None,
+                 toggle_inputs: bool = True):
         self.plan, self.progress = plan, progress
+        self.toggle_inputs = toggle_inputs       # False: a broken rig, the trigger / capture input never moves
         self.drives = drives or {}
         self.axes = [AxisMotion(k + 1, n) for k, n in enumerate(node_ids)]
         v = plc.var
         self._vars = [dict(step=v(f"{INSTANCE}.A{k}.MOT.STEPNO"), done=v(f"{INSTANCE}.A{k}.MOT.DONE"),
-                           error=v(f"{INSTANCE}.A{k}.MOT.ERROR"))
+                           error=v(f"{INSTANCE}.A{k}.MOT.ERROR"), armed=v(f"{INSTANCE}.A{k}.MOT.ARMED"),
+                           probed=v(f"{INSTANCE}.A{k}.MOT.PROBED"))
                       for k in range(1, len(node_ids) + 1)]
-        super().__init__(plc, [x for vs in self._vars for x in vs.values()])
+        super().__init__(plc, [vs[n] for vs in self._vars for n in ("step", "done", "error", "armed")])
 
     def __call__(self) -> bool:
         plc = self.plc
@@ -105,10 +116,15 @@ class MotionSampler(IdlePredicate):
                     off = self._offset(ax.node_id, t - plc.tick_ns)
                     if cur is not None:
                         cur.t1_ns, cur.scan1, cur.ok, cur.off1_ns = t - plc.tick_ns, self.scans - 1, True, off
+                        if cur.kind == "probe":       # Probed is set in the scan the step ends
+                            cur.probed_mm = vs["probed"].value
                         if self.progress:
                             self.progress.step_done(ax, cur)
                     s = self.plan.steps[k - 1]
                     ax.steps.append(StepRecord(k, s.kind, s.label, t - plc.tick_ns, self.scans - 1, off0_ns=off))
+                cur = ax.steps[-1] if ax.steps else None
+                if cur is not None and cur.kind in INPUT_OF_STEP and not cur.t1_ns:
+                    self._toggle(ax, cur, vs, t)
                 if vs["done"].value or vs["error"].value:
                     cur = ax.steps[-1] if ax.steps else None
                     ax.done, ax.error = bool(vs["done"].value), bool(vs["error"].value)
@@ -119,6 +135,19 @@ class MotionSampler(IdlePredicate):
                             self.progress.step_done(ax, cur)
         self.end_call()
         return all(a.done or a.error for a in self.axes)
+
+    def _toggle(self, ax: AxisMotion, rec: StepRecord, vs: dict, t: int) -> None:
+        """The job's hand on the rig: once the PLC armed the step (Armed), the step's input pulses on the
+        emulated drive INPUT_EDGE_DELAY_MS later; a probe step's reading is taken when it ends."""
+        if rec.kind == "probe":
+            rec.probed_mm = vs["probed"].value
+        drive = self.drives.get(ax.node_id)
+        if rec.edge_ns or not vs["armed"].value or drive is None or not self.toggle_inputs:
+            return
+        rec.edge_ns = t + self._offset(ax.node_id, t) + INPUT_EDGE_DELAY_MS * MS
+        pin = INPUT_OF_STEP[rec.kind]
+        drive.io.set_input(pin, 1, rec.edge_ns)
+        drive.io.set_input(pin, 0, rec.edge_ns + INPUT_PULSE_MS * MS)
 
     def _offset(self, node: int, plc_t: int) -> int:
         drive = self.drives.get(node)
@@ -135,7 +164,7 @@ def _write_steps(plc, plan: Plan, inhibit_100us: int = 0) -> None:
     plc[f"{INSTANCE}.NSTEPS"] = len(values)
 
 
-def motion_phase(plan: Plan, timeout_s: float, progress=None, inhibit_100us: int = 0):
+def motion_phase(plan: Plan, timeout_s: float, progress=None, inhibit_100us: int = 0, toggle_inputs: bool = True):
     """The `after` hook of the commissioning runner: runs the steps on every commissioned axis, with this TxPDO2
     inhibit time (the bus budget's, linmot_st.motion.budget)."""
 
@@ -145,7 +174,7 @@ def motion_phase(plan: Plan, timeout_s: float, progress=None, inhibit_100us: int
         nodes = list(drives) or list(range(1, plc[f"{INSTANCE}.AXES"] + 1))
         _write_steps(plc, plan, inhibit_100us)
         plc[f"{INSTANCE}.RUNMOTION"] = True
-        sampler = MotionSampler(plc, nodes, plan, progress, drives)
+        sampler = MotionSampler(plc, nodes, plan, progress, drives, toggle_inputs)
         result = MotionResult(plan, sampler.axes, plc.time_ns)
         for n, d in drives.items():
             now = d.clock_now_ns()
@@ -204,25 +233,33 @@ def as_commissioned(result: RunResult):
                 result.drives[n].params.by_upid[u].ram = after
 
 
-def placed_drives(stroke, opts: RunOptions):
-    """A drive factory: the runner's emulated drive with the mechanics `stroke` places."""
+def placed_drives(stroke, opts: RunOptions, trigger_mode: int | None = None):
+    """A drive factory: the runner's emulated drive with the mechanics `stroke` places; `trigger_mode`: the
+    trigger input's mode 170Ch stored in the drive as the machine was set up (the rig wires X4.6 for the
+    trigger step; a PVL that sets 170Ch is written over it by the commissioning)."""
     from linmot_st.commission.runner import emulated_drive
 
     def factory(node: int):
         drive = emulated_drive(node, opts, motion=stroke.settings())
         stroke.store_home(drive)
+        if trigger_mode is not None:
+            # stored (ROM) before the drive is switched on: its firmware start loads it into RAM
+            drive.params.write(P_TRIGGER_MODE, trigger_mode, ram=False, rom=True)
+            drive.params.by_upid[P_TRIGGER_MODE].ram = trigger_mode
         return drive
     return factory
 
 
 def run_job(pvl, opts: RunOptions, build_result, plan: Plan, *, dataset=None, progress=None,
-            motion_progress=None, timeout_s: float = 60.0, inhibit_100us: int = 0, **kw) -> RunResult:
+            motion_progress=None, timeout_s: float = 60.0, inhibit_100us: int = 0, toggle_inputs: bool = True,
+            **kw) -> RunResult:
     """Commission, then move: the commissioning RunResult with the MotionResult in .after (None when the
     commissioning failed). The emulated drives get the mechanics plan.stroke placed (unless the caller passes
     its own drive_factory); a plan that cannot fit is refused (ValueError) before anything runs."""
     if plan.refusals:
         raise ValueError("the motion plan does not fit the axis: " + "; ".join(plan.refusals))
     if plan.stroke is not None and kw.get("drive_factory") is None:
-        kw["drive_factory"] = placed_drives(plan.stroke, opts)
+        triggered = any(s.kind == "trigger" for s in plan.steps)
+        kw["drive_factory"] = placed_drives(plan.stroke, opts, TRIGGER_MODE_DIRECT if triggered else None)
     return run(pvl, opts, build_result, dataset=dataset, progress=progress,
-               after=motion_phase(plan, timeout_s, motion_progress, inhibit_100us), **kw)
+               after=motion_phase(plan, timeout_s, motion_progress, inhibit_100us, toggle_inputs), **kw)

@@ -2,7 +2,7 @@
 runs on every commissioned axis, and what each step must achieve (docs/motion.md, "The motion job").
 
     set up the PDOs -> power -> home -> move to a position -> jog forward, jog back -> a velocity move, its
-    stop -> for each time curve: move to its start, run it -> start a command-table entry -> stop -> switch off
+    stop -> a move armed on the trigger input -> a touch probe -> for each time curve: move to its start, run it -> start a command-table entry -> stop -> switch off
 
 The expectations are computed here from the PVL file (the curves as written, the command table's targets),
 not taken from the emulated drive.
@@ -33,11 +33,16 @@ VELOCITY = 100.0                # mm/s, MC_MoveVelocity
 VELOCITY_ACCELERATION = 2000.0
 VELOCITY_HOLD_MS = 200          # kept this long once InVelocity, then stopped
 VELOCITY_TOLERANCE = 0.01       # the demand velocity reached: within 1 % of the command
+TRIGGER_POSITION_MM = 60.0      # the move armed on the trigger goes there
+INPUT_EDGE_DELAY_MS = 20        # the job raises X4.6 / X4.5 this long after the PLC armed (Armed), for 10 ms
+INPUT_PULSE_MS = 10
+CAPTURE_TOLERANCE_MM = 0.001    # the captured position against the trajectory at the edge (0.1 um: 1E62h's unit)
 VELOCITY_SLACK_S = 0.1          # the span's margin for the PLC's handshakes and InVelocity's SDO reads
 
 STEP_KINDS = {"setup": "PLC_STEP_SETUP", "power": "PLC_STEP_POWER", "home": "PLC_STEP_HOME",
               "move": "PLC_STEP_MOVE", "curve": "PLC_STEP_CURVE", "ct": "PLC_STEP_CT", "stop": "PLC_STEP_STOP",
-              "off": "PLC_STEP_OFF", "jog": "PLC_STEP_JOG", "velocity": "PLC_STEP_VELOCITY"}
+              "off": "PLC_STEP_OFF", "jog": "PLC_STEP_JOG", "velocity": "PLC_STEP_VELOCITY",
+              "trigger": "PLC_STEP_TRIGGER", "probe": "PLC_STEP_PROBE"}
 
 
 @dataclass
@@ -186,7 +191,11 @@ def _jog_and_velocity() -> list[Step]:
             Step("velocity", f"move at {VELOCITY:g} mm/s for {VELOCITY_HOLD_MS} ms (MC_MoveVelocity)",
                  velocity=VELOCITY, acceleration=VELOCITY_ACCELERATION, hold_ms=VELOCITY_HOLD_MS,
                  reach_mm=(0.0, vel)),
-            Step("stop", "stop the velocity move (MC_Stop)", acceleration=STOP_DECELERATION)]
+            Step("stop", "stop the velocity move (MC_Stop)", acceleration=STOP_DECELERATION),
+            # 02Axh: the target only (01Axh's 16 bytes do not fit the RxPDOs); at the velocity move's 14BEh..14C0h
+            Step("trigger", f"move to {TRIGGER_POSITION_MM:g} mm on trigger X4.6 (02Axh), the job raises it",
+                 position_mm=TRIGGER_POSITION_MM, target_mm=TRIGGER_POSITION_MM),
+            Step("probe", "touch probe on X4.5 (MC_TouchProbe), the job pulses it")]
 
 
 def _spans(steps: list[Step]) -> None:
@@ -195,7 +204,7 @@ def _spans(steps: list[Step]) -> None:
     from where the axis may be (an interval: they have no target) over how far it may go."""
     here = None                     # (lowest, highest) where the axis may be
     for s in steps:
-        if s.kind == "move" or (s.kind == "ct" and s.span_mm is not None):
+        if s.kind in ("move", "trigger") or (s.kind == "ct" and s.span_mm is not None):
             pts = [s.target_mm] + (list(here) if here is not None else []) + (list(s.span_mm) if s.span_mm else [])
             s.span_mm = (min(pts), max(pts))
         elif s.reach_mm is not None and here is not None:
