@@ -12,6 +12,9 @@ record and the bus trace, with the expectations of plan.py (the PVL as written):
 - stop: at its end the demand velocity is 0;
 - trigger: the axis did not move from the step's start to the edge the job raised on X4.6, then moved to the
   target (within POSITION_TOLERANCE_MM at the end);
+- cam: from when the job started turning the master encoder until it stopped, the demand position is the cam
+  as written at the encoder's counter (relative to where the axis stood, scaled by the curve amplitude) within
+  CAM_DEMAND_TOLERANCE_MM;
 - probe: the position the PLC read equals the actual position at the edge the job raised on X4.5 (within
   CAPTURE_TOLERANCE_MM);
 - home: the drive is homed; power: Operation Enabled; off: switched off; setup: done.
@@ -25,7 +28,7 @@ from dataclasses import dataclass, field
 from linmot_st.protocol import commands as C
 from linmot_st.protocol import words as W
 
-from .plan import (CAPTURE_TOLERANCE_MM, CURVE_ACTUAL_TOLERANCE_MM, CURVE_DEMAND_TOLERANCE_MM, MM,
+from .plan import (CAM_DEMAND_TOLERANCE_MM, CAPTURE_TOLERANCE_MM, CURVE_ACTUAL_TOLERANCE_MM, CURVE_DEMAND_TOLERANCE_MM, MM,
                    POSITION_TOLERANCE_MM, VELOCITY_TOLERANCE, Plan)
 
 
@@ -81,6 +84,10 @@ def check_motion(result, plan: Plan, drives: dict) -> MotionCheck:
             off = rec.off1_ns
             end = traj.at(rec.t1_ns + off)
             around = [end] + traj.between(rec.t1_ns + off - margin, rec.t1_ns + off + margin) if margin else [end]
+            if step.kind == "cam" and not rec.edge_ns and not rec.error_id:
+                out.steps.append(StepCheck(ax.axis, rec.index, "cam", False, "the master encoder never turned: "
+                                           "the job started no conveyor (the cam never came in sync?)"))
+                continue
             if step.kind in ("trigger", "probe") and not rec.edge_ns and not rec.error_id:
                 pin = "X4.6" if step.kind == "trigger" else "X4.5"
                 out.steps.append(StepCheck(ax.axis, rec.index, step.kind, False,
@@ -100,6 +107,8 @@ def check_motion(result, plan: Plan, drives: dict) -> MotionCheck:
                                            f"(tolerance {POSITION_TOLERANCE_MM} mm)", reached_mm=reached))
             elif step.kind == "curve":
                 out.steps.append(_check_curve(ax, rec, step, drive))
+            elif step.kind == "cam":
+                out.steps.append(_check_cam(ax, rec, step, drive))
             elif step.kind == "trigger":
                 out.steps.append(_check_trigger(ax, rec, step, traj, end))
             elif step.kind == "probe":
@@ -186,3 +195,20 @@ def _check_trigger(ax, rec, step, traj, end) -> StepCheck:
     return StepCheck(ax.axis, rec.index, "trigger", ok,
                      f"{first}, then at {reached:.3f} mm, target {step.target_mm:g} mm "
                      f"(tolerance {POSITION_TOLERANCE_MM} mm)", reached_mm=reached)
+
+
+def _check_cam(ax, rec, step, drive) -> StepCheck:
+    """The demand against the cam as written at the recorded master-encoder counter while the conveyor turned."""
+    cam, traj = step.cam, drive.mc.trajectory
+    here = traj.at(rec.edge_ns).demand
+    samples = traj.between(rec.edge_ns, rec.edge_end_ns)
+    if not samples:
+        return StepCheck(ax.axis, rec.index, "cam", False, "no trajectory samples while the conveyor turned")
+    counts = traj.master_counts if hasattr(traj, "master_counts") else drive.mc.encoder.counts
+    dev = max(abs(s.demand - cam.position(counts(s.t_ns), here)) for s in samples) / MM
+    top = max(abs(s.demand - here) for s in samples) / MM
+    ok = dev <= CAM_DEMAND_TOLERANCE_MM
+    return StepCheck(ax.axis, rec.index, "cam", ok,
+                     f"demand within {dev:.4f} mm of the cam as written at the master count (tolerance "
+                     f"{CAM_DEMAND_TOLERANCE_MM}), up to {top:.3f} mm from where it coupled, {len(samples)} samples",
+                     demand_dev_mm=dev)

@@ -16,13 +16,14 @@ from linmot_st.commission.project import INSTANCE
 from linmot_st.commission.runner import RunOptions, RunResult, run
 from linmot_st.cosim import IdlePredicate
 
-from linmot_st.protocol.upids import P_TRIGGER_MODE
+from linmot_st.protocol.upids import P_MASTER_ENCODER_SOURCE, P_TRIGGER_MODE
 
-from .plan import INPUT_EDGE_DELAY_MS, INPUT_PULSE_MS, MAX_STEPS, Plan
+from .plan import CAM_TURN_MS, INPUT_EDGE_DELAY_MS, INPUT_PULSE_MS, MAX_STEPS, Plan
 
 MS = 1_000_000
 TRIGGER_MODE_DIRECT = 1         # 170Ch: the trigger input's edges as they come ([MC] 7.2.2)
 INPUT_OF_STEP = {"trigger": "X4.6", "probe": "X4.5"}     # the emulated input the job toggles in the step
+ENCODER_SOURCE_X10 = 1          # 172Ah: the master encoder on X10 ([MC] 7.3; the default 0 has none)
 
 
 @dataclass
@@ -41,7 +42,9 @@ class StepRecord:
     # scan, so the drive's state then is at least what the PLC saw); 0 in virtual time (one clock)
     off0_ns: int = 0
     off1_ns: int = 0
-    edge_ns: int = 0            # trigger, probe: when the job raised the input (the drive's clock)
+    edge_ns: int = 0            # trigger, probe: when the job raised the input; cam: when the conveyor started
+                                # turning (the drive's clock)
+    edge_end_ns: int = 0        # cam: when it stopped
     probed_mm: float | None = None      # probe: the position the PLC read
 
     @property
@@ -123,7 +126,7 @@ class MotionSampler(IdlePredicate):
                     s = self.plan.steps[k - 1]
                     ax.steps.append(StepRecord(k, s.kind, s.label, t - plc.tick_ns, self.scans - 1, off0_ns=off))
                 cur = ax.steps[-1] if ax.steps else None
-                if cur is not None and cur.kind in INPUT_OF_STEP and not cur.t1_ns:
+                if cur is not None and (cur.kind in INPUT_OF_STEP or cur.kind == "cam") and not cur.t1_ns:
                     self._toggle(ax, cur, vs, t)
                 if vs["done"].value or vs["error"].value:
                     cur = ax.steps[-1] if ax.steps else None
@@ -145,6 +148,15 @@ class MotionSampler(IdlePredicate):
         if rec.edge_ns or not vs["armed"].value or drive is None or not self.toggle_inputs:
             return
         rec.edge_ns = t + self._offset(ax.node_id, t) + INPUT_EDGE_DELAY_MS * MS
+        if rec.kind == "cam":               # the conveyor: one cam length in CAM_TURN_MS, then it stops
+            from linmot_st.emulator.linmot.master_encoder import SpeedProfile
+            cam = self.plan.steps[rec.index - 1].cam
+            now = rec.edge_ns - INPUT_EDGE_DELAY_MS * MS
+            rec.edge_end_ns = rec.edge_ns + CAM_TURN_MS * MS
+            drive.mc.encoder.drive_with(SpeedProfile([(rec.edge_ns, cam.length * 1000 / CAM_TURN_MS),
+                                                      (rec.edge_end_ns, 0.0)],
+                                                     start=drive.mc.encoder.counts(now)), now)
+            return
         pin = INPUT_OF_STEP[rec.kind]
         drive.io.set_input(pin, 1, rec.edge_ns)
         drive.io.set_input(pin, 0, rec.edge_ns + INPUT_PULSE_MS * MS)
@@ -233,19 +245,21 @@ def as_commissioned(result: RunResult):
                 result.drives[n].params.by_upid[u].ram = after
 
 
-def placed_drives(stroke, opts: RunOptions, trigger_mode: int | None = None):
+def placed_drives(stroke, opts: RunOptions, trigger_mode: int | None = None, encoder_source: int | None = None):
     """A drive factory: the runner's emulated drive with the mechanics `stroke` places; `trigger_mode`: the
     trigger input's mode 170Ch stored in the drive as the machine was set up (the rig wires X4.6 for the
-    trigger step; a PVL that sets 170Ch is written over it by the commissioning)."""
+    trigger step; a PVL that sets 170Ch is written over it by the commissioning); `encoder_source`: 172Ah, the
+    master encoder wired (the conveyor of the cam steps), stored the same way."""
     from linmot_st.commission.runner import emulated_drive
 
     def factory(node: int):
         drive = emulated_drive(node, opts, motion=stroke.settings())
         stroke.store_home(drive)
-        if trigger_mode is not None:
-            # stored (ROM) before the drive is switched on: its firmware start loads it into RAM
-            drive.params.write(P_TRIGGER_MODE, trigger_mode, ram=False, rom=True)
-            drive.params.by_upid[P_TRIGGER_MODE].ram = trigger_mode
+        for upid, value in ((P_TRIGGER_MODE, trigger_mode), (P_MASTER_ENCODER_SOURCE, encoder_source)):
+            if value is not None:
+                # stored (ROM) before the drive is switched on: its firmware start loads it into RAM
+                drive.params.write(upid, value, ram=False, rom=True)
+                drive.params.by_upid[upid].ram = value
         return drive
     return factory
 
@@ -260,6 +274,8 @@ def run_job(pvl, opts: RunOptions, build_result, plan: Plan, *, dataset=None, pr
         raise ValueError("the motion plan does not fit the axis: " + "; ".join(plan.refusals))
     if plan.stroke is not None and kw.get("drive_factory") is None:
         triggered = any(s.kind == "trigger" for s in plan.steps)
-        kw["drive_factory"] = placed_drives(plan.stroke, opts, TRIGGER_MODE_DIRECT if triggered else None)
+        cams = any(s.kind == "cam" for s in plan.steps)
+        kw["drive_factory"] = placed_drives(plan.stroke, opts, TRIGGER_MODE_DIRECT if triggered else None,
+                                            ENCODER_SOURCE_X10 if cams else None)
     return run(pvl, opts, build_result, dataset=dataset, progress=progress,
                after=motion_phase(plan, timeout_s, motion_progress, inhibit_100us, toggle_inputs), **kw)

@@ -2,7 +2,8 @@
 runs on every commissioned axis, and what each step must achieve (docs/motion.md, "The motion job").
 
     set up the PDOs -> power -> home -> move to a position -> jog forward, jog back -> a velocity move, its
-    stop -> a move armed on the trigger input -> a touch probe -> for each time curve: move to its start, run it -> start a command-table entry -> stop -> switch off
+    stop -> a move armed on the trigger input -> a touch probe -> for each cam curve: follow it on the master
+    encoder the job turns -> for each time curve: move to its start, run it -> start a command-table entry -> stop -> switch off
 
 The expectations are computed here from the PVL file (the curves as written, the command table's targets),
 not taken from the emulated drive.
@@ -18,6 +19,7 @@ from linmot_st.protocol.upids import P_CURVE_AMPLITUDE, P_CURVE_OFFSET, P_CURVE_
 
 from .stroke import Stroke, fit
 
+CAM_OBJECT_TYPE = 0x0103        # position over master-encoder increments (seed 000 5.2)
 MM = 10_000                     # 0.1 um per mm
 MAX_STEPS = 24                  # T_PlcSteps
 MOVE_VELOCITY = 500.0           # mm/s
@@ -30,19 +32,22 @@ JOG_VELOCITY = 50.0             # mm/s
 JOG_ACCELERATION = 1000.0       # mm/s^2 (and deceleration)
 JOG_HOLD_MS = 300               # the jog input held this long
 VELOCITY = 100.0                # mm/s, MC_MoveVelocity
-VELOCITY_ACCELERATION = 2000.0
+VELOCITY_ACCELERATION = 5000.0  # a short ramp: FB_LmMoveVelocity reads 1BAEh by SDO every scan until InVelocity
 VELOCITY_HOLD_MS = 200          # kept this long once InVelocity, then stopped
 VELOCITY_TOLERANCE = 0.01       # the demand velocity reached: within 1 % of the command
 TRIGGER_POSITION_MM = 60.0      # the move armed on the trigger goes there
 INPUT_EDGE_DELAY_MS = 20        # the job raises X4.6 / X4.5 this long after the PLC armed (Armed), for 10 ms
 INPUT_PULSE_MS = 10
 CAPTURE_TOLERANCE_MM = 0.001    # the captured position against the trajectory at the edge (0.1 um: 1E62h's unit)
+CAM_TURN_MS = 500              # the job turns the conveyor (master encoder) one cam length in this time
+CAM_HOLD_MS = 600               # the PLC keeps the cam coupled this long after InSync (the turn starts 20 ms in)
+CAM_DEMAND_TOLERANCE_MM = 0.001
 VELOCITY_SLACK_S = 0.1          # the span's margin for the PLC's handshakes and InVelocity's SDO reads
 
 STEP_KINDS = {"setup": "PLC_STEP_SETUP", "power": "PLC_STEP_POWER", "home": "PLC_STEP_HOME",
               "move": "PLC_STEP_MOVE", "curve": "PLC_STEP_CURVE", "ct": "PLC_STEP_CT", "stop": "PLC_STEP_STOP",
               "off": "PLC_STEP_OFF", "jog": "PLC_STEP_JOG", "velocity": "PLC_STEP_VELOCITY",
-              "trigger": "PLC_STEP_TRIGGER", "probe": "PLC_STEP_PROBE"}
+              "trigger": "PLC_STEP_TRIGGER", "probe": "PLC_STEP_PROBE", "cam": "PLC_STEP_CAM"}
 
 
 @dataclass
@@ -66,6 +71,28 @@ class CurveRun:
 
 
 @dataclass
+class CamRun:
+    """A commissioned cam curve (object type 0103h) coupled relative to where the axis stands (1y1xh): the
+    setpoints over `length` master counts from count 0, scaled by the curve amplitude parameter."""
+    curve_id: int
+    name: str
+    setpoints: list[int]
+    length: int                     # master-encoder counts
+    amplitude: float                # factor
+
+    def position(self, count: float, here: float) -> float:
+        """The demand (pu) at `count` when the cam was coupled with the axis at `here` (the cam's start there)."""
+        y = self.setpoints
+        x = min(max(count, 0.0), self.length) / self.length * (len(y) - 1)
+        i = min(int(x), len(y) - 2)
+        return here + self.amplitude * (y[i] + (x - i) * (y[i + 1] - y[i]) - y[0])
+
+    def reach_mm(self) -> tuple[float, float]:
+        y = self.setpoints
+        return (self.amplitude * (min(y) - y[0]) / MM, self.amplitude * (max(y) - y[0]) / MM)
+
+
+@dataclass
 class Step:
     kind: str
     label: str
@@ -76,6 +103,7 @@ class Step:
     entry: int = 0
     target_mm: float | None = None          # where the axis must be at the end of the step
     curve: CurveRun | None = None
+    cam: CamRun | None = None
     chain: list[int] = field(default_factory=list)   # CT: the entries the sequence runs
     span_mm: tuple[float, float] | None = None       # the lowest and highest position the step visits
     hold_ms: int = 0                                 # jog, velocity: T_PlcStep.Hold
@@ -127,23 +155,36 @@ def _ct_chain(pvl, entry: int, scale_pos: int) -> tuple[list[int], list[int] | N
     return chain, targets or None
 
 
-def plan(pvl, position_mm: float = 50.0, settings=None) -> Plan:
-    """The steps; `settings`: the emulated drives' MotionSettings whose stroke the plan is fitted into."""
+def plan(pvl, position_mm: float = 50.0, settings=None, fb_steps: bool = True) -> Plan:
+    """The steps; `settings`: the emulated drives' MotionSettings whose stroke the plan is fitted into;
+    `fb_steps` False: without the jog, velocity, trigger, probe and cam steps (the job as it was before them: their
+    parameter writes and SDO reads start on every axis in the same scan, a burst the bus budget does not plan,
+    docs/motion.md)."""
     steps = [Step("setup", "set up the PDOs (TxPDO1 event timer 50 ms)"), Step("power", "power (MC_Power)"),
              Step("home", "home (MC_Home)")]
     not_run: list[str] = []
     move = dict(velocity=MOVE_VELOCITY, acceleration=MOVE_ACCELERATION)
     steps.append(Step("move", f"move to {position_mm:g} mm", position_mm=position_mm, target_mm=position_mm,
                       **move))
-    steps += _jog_and_velocity()
+    steps += _jog_and_velocity() if fb_steps else []
     offset = _param(pvl, P_CURVE_OFFSET, 0)
     time_scale = _param(pvl, P_CURVE_TIME_SCALE, 10000)
     amplitude = _param(pvl, P_CURVE_AMPLITUDE, 1000) / 1000.0
     for c in pvl.curves:
         info = c.info
+        if info.object_type == CAM_OBJECT_TYPE and not fb_steps:
+            not_run.append(f"curve {c.curve_id} {info.name}: a cam profile (object type 0103h): the cam steps are off")
+        elif info.object_type == CAM_OBJECT_TYPE:
+            cam = CamRun(c.curve_id, info.name, list(c.setpoints), info.x_length, amplitude)
+            steps.append(Step("cam", f"follow cam {c.curve_id} {info.name} on the master encoder (MC_CamIn)",
+                              curve_id=c.curve_id, hold_ms=CAM_HOLD_MS, cam=cam, reach_mm=cam.reach_mm()))
+    for c in pvl.curves:
+        info = c.info
+        if info.object_type == CAM_OBJECT_TYPE:
+            continue
         if info.object_type != 0x0003:
-            not_run.append(f"curve {c.curve_id} {info.name}: object type {info.object_type:04X}h (a cam profile) "
-                           "needs a master encoder, which the emulated drive does not simulate")
+            not_run.append(f"curve {c.curve_id} {info.name}: object type {info.object_type:04X}h is neither a "
+                           "time curve nor a cam")
             continue
         run = CurveRun(c.curve_id, info.name, list(c.setpoints), info.x_length * 10_000 * time_scale // 10000,
                        offset, amplitude)

@@ -128,7 +128,7 @@ class MotionReport:
         for k, r in enumerate(edges):
             x = (r.edge_ns - off - t0) / 1e9
             top.axvline(x, color="tab:purple", linestyle=":", linewidth=1.0,
-                        label=None if k else "input edge the job raised (X4.6 / X4.5)")
+                        label=None if k else "the job: input edge (X4.6, X4.5) or conveyor start")
             if r.probed_mm is not None:
                 top.plot([x], [r.probed_mm], "o", color="tab:purple", markersize=5,
                          label="position captured (MC_TouchProbe)")
