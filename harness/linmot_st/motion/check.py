@@ -5,7 +5,19 @@ record and the bus trace, with the expectations of plan.py (the PVL as written):
 - curve: from the moment the drive took the curve command (its record of executed commands; on the simulated
   bus that is the end of the command's RxPDO3, tests/test_motion_job.py checks it) over the curve time, the demand position follows the curve as written within CURVE_DEMAND_TOLERANCE_MM and the actual
   position within CURVE_ACTUAL_TOLERANCE_MM (the following error);
-- home: the drive is homed; power: Operation Enabled; off: switched off; setup, stop: done.
+- jog: over the step the demand velocity reached the jog velocity (within VELOCITY_TOLERANCE) in the jog's
+  direction, the axis moved that way, and at the end it stands still (the jog input fell);
+- velocity: over the step the demand velocity reached the command in its direction and it still runs at it at
+  the end of the step (the velocity is kept until the next step, a stop);
+- stop: at its end the demand velocity is 0;
+- trigger: the axis did not move from the step's start to the edge the job raised on X4.6, then moved to the
+  target (within POSITION_TOLERANCE_MM at the end);
+- cam: from when the job started turning the master encoder until it stopped, the demand position is the cam
+  as written at the encoder's counter (relative to where the axis stood, scaled by the curve amplitude) within
+  CAM_DEMAND_TOLERANCE_MM;
+- probe: the position the PLC read equals the actual position at the edge the job raised on X4.5 (within
+  CAPTURE_TOLERANCE_MM);
+- home: the drive is homed; power: Operation Enabled; off: switched off; setup: done.
 """
 
 from __future__ import annotations
@@ -16,7 +28,8 @@ from dataclasses import dataclass, field
 from linmot_st.protocol import commands as C
 from linmot_st.protocol import words as W
 
-from .plan import (CURVE_ACTUAL_TOLERANCE_MM, CURVE_DEMAND_TOLERANCE_MM, MM, POSITION_TOLERANCE_MM, Plan)
+from .plan import (CAM_DEMAND_TOLERANCE_MM, CAPTURE_TOLERANCE_MM, CURVE_ACTUAL_TOLERANCE_MM, CURVE_DEMAND_TOLERANCE_MM, MM,
+                   POSITION_TOLERANCE_MM, VELOCITY_TOLERANCE, Plan)
 
 
 @dataclass
@@ -71,6 +84,17 @@ def check_motion(result, plan: Plan, drives: dict) -> MotionCheck:
             off = rec.off1_ns
             end = traj.at(rec.t1_ns + off)
             around = [end] + traj.between(rec.t1_ns + off - margin, rec.t1_ns + off + margin) if margin else [end]
+            if step.kind == "cam" and not rec.edge_ns and not rec.error_id:
+                out.steps.append(StepCheck(ax.axis, rec.index, "cam", False, "the master encoder never turned: "
+                                           "the job started no conveyor (the cam never came in sync?)"))
+                continue
+            if step.kind in ("trigger", "probe") and not rec.edge_ns and not rec.error_id:
+                pin = "X4.6" if step.kind == "trigger" else "X4.5"
+                out.steps.append(StepCheck(ax.axis, rec.index, step.kind, False,
+                                           f"no edge on {pin}: the job never raised the input, the armed "
+                                           f"{'move' if step.kind == 'trigger' else 'capture'} waited "
+                                           f"(at {end.actual / MM:.3f} mm)", reached_mm=end.actual / MM))
+                continue
             if not rec.ok:
                 out.steps.append(StepCheck(ax.axis, rec.index, rec.kind, False, f"failed: ErrorID 16#{rec.error_id:04X}"
                                            + (f", drive error {rec.drive_error:04X}h" if rec.drive_error else "")))
@@ -83,6 +107,24 @@ def check_motion(result, plan: Plan, drives: dict) -> MotionCheck:
                                            f"(tolerance {POSITION_TOLERANCE_MM} mm)", reached_mm=reached))
             elif step.kind == "curve":
                 out.steps.append(_check_curve(ax, rec, step, drive))
+            elif step.kind == "cam":
+                out.steps.append(_check_cam(ax, rec, step, drive))
+            elif step.kind == "trigger":
+                out.steps.append(_check_trigger(ax, rec, step, traj, end))
+            elif step.kind == "probe":
+                at = traj.at(rec.edge_ns).actual / MM
+                got = rec.probed_mm
+                ok = got is not None and abs(got - at) <= CAPTURE_TOLERANCE_MM
+                out.steps.append(StepCheck(ax.axis, rec.index, "probe", ok,
+                                           f"captured {got if got is None else f'{got:.4f}'} mm, actual position at "
+                                           f"the edge {at:.4f} mm (tolerance {CAPTURE_TOLERANCE_MM} mm)",
+                                           reached_mm=got))
+            elif step.kind in ("jog", "velocity"):
+                out.steps.append(_check_velocity(ax, rec, step, traj, end))
+            elif step.kind == "stop":
+                s = next((s for s in around if s.demand_velocity == 0), end)
+                out.steps.append(StepCheck(ax.axis, rec.index, "stop", s.demand_velocity == 0,
+                                           f"demand velocity {s.demand_velocity / MM:g} mm/s at the end"))
             elif step.kind == "home":
                 ok = any(s.status_word & W.SW_HOMED for s in around)
                 out.steps.append(StepCheck(ax.axis, rec.index, "home", ok, "homed" if ok else "not homed"))
@@ -113,3 +155,60 @@ def _check_curve(ax, rec, step, drive) -> StepCheck:
                      f"demand within {dem:.4f} mm of the curve as written (tolerance {CURVE_DEMAND_TOLERANCE_MM}), "
                      f"actual within {act:.3f} mm (tolerance {CURVE_ACTUAL_TOLERANCE_MM}), {len(samples)} samples",
                      demand_dev_mm=dem, actual_dev_mm=act, t_exec_ns=t_exec - rec.off0_ns)
+
+
+def _check_velocity(ax, rec, step, traj, end) -> StepCheck:
+    """A jog or a velocity move: the peak demand velocity in the step's direction against the command; the
+    distance moved; a jog stands still at its end, a velocity move still runs at the command."""
+    samples = traj.between(rec.t0_ns + rec.off0_ns, rec.t1_ns + rec.off1_ns)
+    if not samples:
+        return StepCheck(ax.axis, rec.index, step.kind, False, "no trajectory samples over the step")
+    sign = 1 if step.velocity > 0 else -1
+    want = abs(step.velocity)
+    peak = max(sign * s.demand_velocity for s in samples) / MM
+    moved = sign * (end.actual - samples[0].actual) / MM
+    reached = abs(peak - want) <= VELOCITY_TOLERANCE * want
+    if step.kind == "jog":
+        ended = end.demand_velocity == 0
+        ok = reached and moved > 0 and ended
+        tail = "at standstill at the end" if ended else f"still at {end.demand_velocity / MM:g} mm/s at the end"
+    else:
+        ended = abs(sign * end.demand_velocity / MM - want) <= VELOCITY_TOLERANCE * want
+        ok = reached and moved > 0 and ended
+        tail = f"{'still' if ended else 'no longer'} at it at the end ({end.demand_velocity / MM:g} mm/s)"
+    direction = "forward" if sign > 0 else "back"
+    return StepCheck(ax.axis, rec.index, step.kind, ok,
+                     f"peak demand velocity {peak:.2f} mm/s {direction} (command {want:g}, tolerance "
+                     f"{VELOCITY_TOLERANCE:.0%}), moved {moved:+.3f} mm {direction}, {tail}", reached_mm=end.actual / MM)
+
+
+def _check_trigger(ax, rec, step, traj, end) -> StepCheck:
+    """Still until the edge (no demand velocity between the step's start and the edge), then at the target."""
+    before = traj.between(rec.t0_ns + rec.off0_ns, rec.edge_ns)
+    early = next((s for s in before if s.demand_velocity != 0), None)
+    reached = end.actual / MM
+    at = abs(reached - step.target_mm) <= POSITION_TOLERANCE_MM
+    ok = early is None and at
+    first = ("moved before the edge (demand velocity "
+             f"{early.demand_velocity / MM:g} mm/s {(rec.edge_ns - early.t_ns) / 1e6:.1f} ms before it)"
+             if early is not None else "still until the edge on X4.6")
+    return StepCheck(ax.axis, rec.index, "trigger", ok,
+                     f"{first}, then at {reached:.3f} mm, target {step.target_mm:g} mm "
+                     f"(tolerance {POSITION_TOLERANCE_MM} mm)", reached_mm=reached)
+
+
+def _check_cam(ax, rec, step, drive) -> StepCheck:
+    """The demand against the cam as written at the recorded master-encoder counter while the conveyor turned."""
+    cam, traj = step.cam, drive.mc.trajectory
+    here = traj.at(rec.edge_ns).demand
+    samples = traj.between(rec.edge_ns, rec.edge_end_ns)
+    if not samples:
+        return StepCheck(ax.axis, rec.index, "cam", False, "no trajectory samples while the conveyor turned")
+    counts = traj.master_counts if hasattr(traj, "master_counts") else drive.mc.encoder.counts
+    dev = max(abs(s.demand - cam.position(counts(s.t_ns), here)) for s in samples) / MM
+    top = max(abs(s.demand - here) for s in samples) / MM
+    ok = dev <= CAM_DEMAND_TOLERANCE_MM
+    return StepCheck(ax.axis, rec.index, "cam", ok,
+                     f"demand within {dev:.4f} mm of the cam as written at the master count (tolerance "
+                     f"{CAM_DEMAND_TOLERANCE_MM}), up to {top:.3f} mm from where it coupled, {len(samples)} samples",
+                     demand_dev_mm=dev)

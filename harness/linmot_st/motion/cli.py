@@ -56,7 +56,7 @@ def run_command(args: argparse.Namespace) -> int:
     from linmot_st.commission.progress import Progress
 
     from .check import check_motion
-    from .job import run_job
+    from .job import as_commissioned, run_job
     from .plan import plan as make_plan
     from .report import MotionProgress, MotionReport
 
@@ -96,7 +96,8 @@ def run_command(args: argparse.Namespace) -> int:
     finally:
         if progress:
             progress.close()
-    report = commission_report(args, prep, result, command_line(args))
+    with as_commissioned(result):       # the memory check: as the commissioning left it, before the motion
+        report = commission_report(args, prep, result, command_line(args))
     sys.stdout.write(report.text())
     status = 0 if report.figures["result"]["passed"] else 130 if result.interrupted else 1
     motion = None
@@ -105,6 +106,10 @@ def run_command(args: argparse.Namespace) -> int:
         mean, peak = result.after.bus_load
         print(f"bus after the PDO setup: load {100 * mean:.1f} % mean, {100 * peak:.1f} % in the busiest 100 ms "
               f"(budget {args.bus_share:g} %)")
+    if result.after is not None and result.after.ram_changed:
+        changed = sorted({u for ps in result.after.ram_changed.values() for u in ps})
+        print("RAM parameters the motion steps wrote (checked above as commissioned): "
+              + ", ".join(f"{u:04X}h" for u in changed))
     if result.after is not None:
         check = check_motion(result.after, plan, result.drives)
         motion = MotionReport(result.after, check, result.trace, result.drives)

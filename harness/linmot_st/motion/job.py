@@ -9,13 +9,21 @@ plc_project's motion steps on every axis (plc_project/motion.st), sampled scan b
 from __future__ import annotations
 
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 from linmot_st.commission.project import INSTANCE
 from linmot_st.commission.runner import RunOptions, RunResult, run
 from linmot_st.cosim import IdlePredicate
 
-from .plan import MAX_STEPS, Plan
+from linmot_st.protocol.upids import P_MASTER_ENCODER_SOURCE, P_TRIGGER_MODE
+
+from .plan import CAM_TURN_MS, INPUT_EDGE_DELAY_MS, INPUT_PULSE_MS, MAX_STEPS, Plan
+
+MS = 1_000_000
+TRIGGER_MODE_DIRECT = 1         # 170Ch: the trigger input's edges as they come ([MC] 7.2.2)
+INPUT_OF_STEP = {"trigger": "X4.6", "probe": "X4.5"}     # the emulated input the job toggles in the step
+ENCODER_SOURCE_X10 = 1          # 172Ah: the master encoder on X10 ([MC] 7.3; the default 0 has none)
 
 
 @dataclass
@@ -34,6 +42,10 @@ class StepRecord:
     # scan, so the drive's state then is at least what the PLC saw); 0 in virtual time (one clock)
     off0_ns: int = 0
     off1_ns: int = 0
+    edge_ns: int = 0            # trigger, probe: when the job raised the input; cam: when the conveyor started
+                                # turning (the drive's clock)
+    edge_end_ns: int = 0        # cam: when it stopped
+    probed_mm: float | None = None      # probe: the position the PLC read
 
     @property
     def scans(self) -> int:
@@ -69,6 +81,9 @@ class MotionResult:
     clock_margin_ns: int = 0                            # how far that offset may be off (real time)
     inhibit_100us: int = 0                              # TxPDO2's inhibit time the bus budget chose
     bus_load: tuple | None = None                       # (mean, peak of 100 ms) load after the PDO setup (sim)
+    # emulated drives: parameters whose RAM value the steps changed (MC_Jog and MC_MoveVelocity write the
+    # predefined VA interpolator's 14B0h..14C0h): node -> {upid: (RAM before the motion, after)}
+    ram_changed: dict = field(default_factory=dict)
 
     @property
     def finished(self) -> bool:
@@ -78,15 +93,18 @@ class MotionResult:
 class MotionSampler(IdlePredicate):
     """Reads each axis' StepNo and end flags after every scan; records step boundaries; tells progress."""
 
-    def __init__(self, plc, node_ids: list[int], plan: Plan, progress=None, drives: dict | None = None):
+    def __init__(self, plc, node_ids: list[int], plan: Plan, progress=None, drives: dict | None = None,
+                 toggle_inputs: bool = True):
         self.plan, self.progress = plan, progress
+        self.toggle_inputs = toggle_inputs       # False: a broken rig, the trigger / capture input never moves
         self.drives = drives or {}
         self.axes = [AxisMotion(k + 1, n) for k, n in enumerate(node_ids)]
         v = plc.var
         self._vars = [dict(step=v(f"{INSTANCE}.A{k}.MOT.STEPNO"), done=v(f"{INSTANCE}.A{k}.MOT.DONE"),
-                           error=v(f"{INSTANCE}.A{k}.MOT.ERROR"))
+                           error=v(f"{INSTANCE}.A{k}.MOT.ERROR"), armed=v(f"{INSTANCE}.A{k}.MOT.ARMED"),
+                           probed=v(f"{INSTANCE}.A{k}.MOT.PROBED"))
                       for k in range(1, len(node_ids) + 1)]
-        super().__init__(plc, [x for vs in self._vars for x in vs.values()])
+        super().__init__(plc, [vs[n] for vs in self._vars for n in ("step", "done", "error", "armed")])
 
     def __call__(self) -> bool:
         plc = self.plc
@@ -101,10 +119,15 @@ class MotionSampler(IdlePredicate):
                     off = self._offset(ax.node_id, t - plc.tick_ns)
                     if cur is not None:
                         cur.t1_ns, cur.scan1, cur.ok, cur.off1_ns = t - plc.tick_ns, self.scans - 1, True, off
+                        if cur.kind == "probe":       # Probed is set in the scan the step ends
+                            cur.probed_mm = vs["probed"].value
                         if self.progress:
                             self.progress.step_done(ax, cur)
                     s = self.plan.steps[k - 1]
                     ax.steps.append(StepRecord(k, s.kind, s.label, t - plc.tick_ns, self.scans - 1, off0_ns=off))
+                cur = ax.steps[-1] if ax.steps else None
+                if cur is not None and (cur.kind in INPUT_OF_STEP or cur.kind == "cam") and not cur.t1_ns:
+                    self._toggle(ax, cur, vs, t)
                 if vs["done"].value or vs["error"].value:
                     cur = ax.steps[-1] if ax.steps else None
                     ax.done, ax.error = bool(vs["done"].value), bool(vs["error"].value)
@@ -116,6 +139,28 @@ class MotionSampler(IdlePredicate):
         self.end_call()
         return all(a.done or a.error for a in self.axes)
 
+    def _toggle(self, ax: AxisMotion, rec: StepRecord, vs: dict, t: int) -> None:
+        """The job's hand on the rig: once the PLC armed the step (Armed), the step's input pulses on the
+        emulated drive INPUT_EDGE_DELAY_MS later; a probe step's reading is taken when it ends."""
+        if rec.kind == "probe":
+            rec.probed_mm = vs["probed"].value
+        drive = self.drives.get(ax.node_id)
+        if rec.edge_ns or not vs["armed"].value or drive is None or not self.toggle_inputs:
+            return
+        rec.edge_ns = t + self._offset(ax.node_id, t) + INPUT_EDGE_DELAY_MS * MS
+        if rec.kind == "cam":               # the conveyor: one cam length in CAM_TURN_MS, then it stops
+            from linmot_st.emulator.linmot.master_encoder import SpeedProfile
+            cam = self.plan.steps[rec.index - 1].cam
+            now = rec.edge_ns - INPUT_EDGE_DELAY_MS * MS
+            rec.edge_end_ns = rec.edge_ns + CAM_TURN_MS * MS
+            drive.mc.encoder.drive_with(SpeedProfile([(rec.edge_ns, cam.length * 1000 / CAM_TURN_MS),
+                                                      (rec.edge_end_ns, 0.0)],
+                                                     start=drive.mc.encoder.counts(now)), now)
+            return
+        pin = INPUT_OF_STEP[rec.kind]
+        drive.io.set_input(pin, 1, rec.edge_ns)
+        drive.io.set_input(pin, 0, rec.edge_ns + INPUT_PULSE_MS * MS)
+
     def _offset(self, node: int, plc_t: int) -> int:
         drive = self.drives.get(node)
         now = drive.clock_now_ns() if drive is not None else None
@@ -126,12 +171,12 @@ def _write_steps(plc, plan: Plan, inhibit_100us: int = 0) -> None:
     # every step carries the TxPDO2 inhibit time of the bus budget (linmot_st.motion.budget); SETUP uses it
     values = [{**s.plc_value(), "INHIBIT100US": inhibit_100us} for s in plan.steps]
     blank = {"KIND": "PLC_STEP_NONE", "POSITION": 0.0, "VELOCITY": 0.0, "ACCELERATION": 0.0, "CURVEID": 0,
-             "ENTRY": 0, "INHIBIT100US": 0}
+             "ENTRY": 0, "INHIBIT100US": 0, "HOLD": 0}
     plc[f"{INSTANCE}.STEPS"] = values + [blank] * (MAX_STEPS - len(values))
     plc[f"{INSTANCE}.NSTEPS"] = len(values)
 
 
-def motion_phase(plan: Plan, timeout_s: float, progress=None, inhibit_100us: int = 0):
+def motion_phase(plan: Plan, timeout_s: float, progress=None, inhibit_100us: int = 0, toggle_inputs: bool = True):
     """The `after` hook of the commissioning runner: runs the steps on every commissioned axis, with this TxPDO2
     inhibit time (the bus budget's, linmot_st.motion.budget)."""
 
@@ -141,7 +186,7 @@ def motion_phase(plan: Plan, timeout_s: float, progress=None, inhibit_100us: int
         nodes = list(drives) or list(range(1, plc[f"{INSTANCE}.AXES"] + 1))
         _write_steps(plc, plan, inhibit_100us)
         plc[f"{INSTANCE}.RUNMOTION"] = True
-        sampler = MotionSampler(plc, nodes, plan, progress, drives)
+        sampler = MotionSampler(plc, nodes, plan, progress, drives, toggle_inputs)
         result = MotionResult(plan, sampler.axes, plc.time_ns)
         for n, d in drives.items():
             now = d.clock_now_ns()
@@ -150,6 +195,8 @@ def motion_phase(plan: Plan, timeout_s: float, progress=None, inhibit_100us: int
                 # time axis; the checks use each step's own readings, StepRecord.off0_ns / off1_ns)
                 result.clock_offsets[n] = now - plc.time_ns
                 result.clock_margin_ns = 5 * plc.tick_ns
+        ram0 = {n: {u: p.ram for u, p in d.params.by_upid.items()} for n, d in drives.items()
+                if hasattr(d, "params")}
         wall0 = time.perf_counter()
         try:
             sim.run_until(sampler, max_scans=int(timeout_s * 1e9 // plc.tick_ns))
@@ -158,6 +205,11 @@ def motion_phase(plan: Plan, timeout_s: float, progress=None, inhibit_100us: int
         result.wall_s = time.perf_counter() - wall0
         result.t1_ns, result.scans = plc.time_ns, sampler.scans
         result.inhibit_100us = inhibit_100us
+        for n, before in ram0.items():
+            params = drives[n].params.by_upid
+            changed = {u: (v, params[u].ram) for u, v in before.items() if params[u].ram != v}
+            if changed:
+                result.ram_changed[n] = changed
         bus = getattr(sim, "bus", None)
         if getattr(bus, "trace", None) is not None and hasattr(bus, "bit_ns"):
             from .budget import measured_load
@@ -175,26 +227,58 @@ def motion_phase(plan: Plan, timeout_s: float, progress=None, inhibit_100us: int
     return after
 
 
-def placed_drives(stroke, opts: RunOptions, datasets=None):
+@contextmanager
+def as_commissioned(result: RunResult):
+    """While inside, the emulated drives' RAM holds what the commissioning left there: the commissioning's
+    memory check is of the commissioning, not of the parameters the motion steps wrote since (their list:
+    MotionResult.ram_changed, printed by the job)."""
+    m = result.after
+    changed = m.ram_changed if m is not None else {}
+    for n, ps in changed.items():
+        for u, (before, _) in ps.items():
+            result.drives[n].params.by_upid[u].ram = before
+    try:
+        yield
+    finally:
+        for n, ps in changed.items():
+            for u, (_, after) in ps.items():
+                result.drives[n].params.by_upid[u].ram = after
+
+
+def placed_drives(stroke, opts: RunOptions, datasets=None, trigger_mode: int | None = None,
+                  encoder_source: int | None = None):
     """A drive factory: the runner's emulated drive (of the series of its node's file, `datasets`) with the
-    mechanics `stroke` places."""
+    mechanics `stroke` places; `trigger_mode`: the
+    trigger input's mode 170Ch stored in the drive as the machine was set up (the rig wires X4.6 for the
+    trigger step; a PVL that sets 170Ch is written over it by the commissioning); `encoder_source`: 172Ah, the
+    master encoder wired (the conveyor of the cam steps), stored the same way."""
     from linmot_st.commission.runner import emulated_drive
 
     def factory(node: int):
         drive = emulated_drive(node, opts, datasets, motion=stroke.settings())
         stroke.store_home(drive)
+        for upid, value in ((P_TRIGGER_MODE, trigger_mode), (P_MASTER_ENCODER_SOURCE, encoder_source)):
+            if value is not None and upid in drive.params.by_upid:      # (a B1100 has neither)
+                # stored (ROM) before the drive is switched on: its firmware start loads it into RAM
+                drive.params.write(upid, value, ram=False, rom=True)
+                drive.params.by_upid[upid].ram = value
         return drive
     return factory
 
 
 def run_job(pvl, opts: RunOptions, build_result, plan: Plan, *, dataset=None, progress=None,
-            motion_progress=None, timeout_s: float = 60.0, inhibit_100us: int = 0, **kw) -> RunResult:
+            motion_progress=None, timeout_s: float = 60.0, inhibit_100us: int = 0, toggle_inputs: bool = True,
+            **kw) -> RunResult:
     """Commission, then move: the commissioning RunResult with the MotionResult in .after (None when the
     commissioning failed). The emulated drives get the mechanics plan.stroke placed (unless the caller passes
     its own drive_factory); a plan that cannot fit is refused (ValueError) before anything runs."""
     if plan.refusals:
         raise ValueError("the motion plan does not fit the axis: " + "; ".join(plan.refusals))
     if plan.stroke is not None and kw.get("drive_factory") is None:
-        kw["drive_factory"] = placed_drives(plan.stroke, opts, kw.get("datasets"))
+        triggered = any(s.kind == "trigger" for s in plan.steps)
+        cams = any(s.kind == "cam" for s in plan.steps)
+        kw["drive_factory"] = placed_drives(plan.stroke, opts, kw.get("datasets"),
+                                            TRIGGER_MODE_DIRECT if triggered else None,
+                                            ENCODER_SOURCE_X10 if cams else None)
     return run(pvl, opts, build_result, dataset=dataset, progress=progress,
-               after=motion_phase(plan, timeout_s, motion_progress, inhibit_100us), **kw)
+               after=motion_phase(plan, timeout_s, motion_progress, inhibit_100us, toggle_inputs), **kw)

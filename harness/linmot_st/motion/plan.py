@@ -1,8 +1,9 @@
 """The steps of the motion job, from a PVL file: what plc_project's motion program (plc_project/motion.st)
 runs on every commissioned axis, and what each step must achieve (docs/motion.md, "The motion job").
 
-    set up the PDOs -> power -> home -> move to a position -> for each time curve: move to its start, run
-    it -> start a command-table entry -> stop -> switch off
+    set up the PDOs -> power -> home -> move to a position -> jog forward, jog back -> a velocity move, its
+    stop -> a move armed on the trigger input -> a touch probe -> for each cam curve: follow it on the master
+    encoder the job turns -> for each time curve: move to its start, run it -> start a command-table entry -> stop -> switch off
 
 The expectations are computed here from the PVL file (the curves as written, the command table's targets),
 not taken from the emulated drive.
@@ -18,6 +19,7 @@ from linmot_st.protocol.upids import P_CURVE_AMPLITUDE, P_CURVE_OFFSET, P_CURVE_
 
 from .stroke import Stroke, fit
 
+CAM_OBJECT_TYPE = 0x0103        # position over master-encoder increments (seed 000 5.2)
 MM = 10_000                     # 0.1 um per mm
 MAX_STEPS = 24                  # T_PlcSteps
 MOVE_VELOCITY = 500.0           # mm/s
@@ -26,10 +28,26 @@ STOP_DECELERATION = 5000.0
 POSITION_TOLERANCE_MM = 0.1     # the emulated drive's in-target window
 CURVE_DEMAND_TOLERANCE_MM = 0.001
 CURVE_ACTUAL_TOLERANCE_MM = 0.5
+JOG_VELOCITY = 50.0             # mm/s
+JOG_ACCELERATION = 1000.0       # mm/s^2 (and deceleration)
+JOG_HOLD_MS = 300               # the jog input held this long
+VELOCITY = 100.0                # mm/s, MC_MoveVelocity
+VELOCITY_ACCELERATION = 5000.0  # a short ramp: FB_LmMoveVelocity reads 1BAEh by SDO every scan until InVelocity
+VELOCITY_HOLD_MS = 200          # kept this long once InVelocity, then stopped
+VELOCITY_TOLERANCE = 0.01       # the demand velocity reached: within 1 % of the command
+TRIGGER_POSITION_MM = 60.0      # the move armed on the trigger goes there
+INPUT_EDGE_DELAY_MS = 20        # the job raises X4.6 / X4.5 this long after the PLC armed (Armed), for 10 ms
+INPUT_PULSE_MS = 10
+CAPTURE_TOLERANCE_MM = 0.001    # the captured position against the trajectory at the edge (0.1 um: 1E62h's unit)
+CAM_TURN_MS = 500              # the job turns the conveyor (master encoder) one cam length in this time
+CAM_HOLD_MS = 600               # the PLC keeps the cam coupled this long after InSync (the turn starts 20 ms in)
+CAM_DEMAND_TOLERANCE_MM = 0.001
+VELOCITY_SLACK_S = 0.1          # the span's margin for the PLC's handshakes and InVelocity's SDO reads
 
 STEP_KINDS = {"setup": "PLC_STEP_SETUP", "power": "PLC_STEP_POWER", "home": "PLC_STEP_HOME",
               "move": "PLC_STEP_MOVE", "curve": "PLC_STEP_CURVE", "ct": "PLC_STEP_CT", "stop": "PLC_STEP_STOP",
-              "off": "PLC_STEP_OFF"}
+              "off": "PLC_STEP_OFF", "jog": "PLC_STEP_JOG", "velocity": "PLC_STEP_VELOCITY",
+              "trigger": "PLC_STEP_TRIGGER", "probe": "PLC_STEP_PROBE", "cam": "PLC_STEP_CAM"}
 
 
 @dataclass
@@ -53,6 +71,28 @@ class CurveRun:
 
 
 @dataclass
+class CamRun:
+    """A commissioned cam curve (object type 0103h) coupled relative to where the axis stands (1y1xh): the
+    setpoints over `length` master counts from count 0, scaled by the curve amplitude parameter."""
+    curve_id: int
+    name: str
+    setpoints: list[int]
+    length: int                     # master-encoder counts
+    amplitude: float                # factor
+
+    def position(self, count: float, here: float) -> float:
+        """The demand (pu) at `count` when the cam was coupled with the axis at `here` (the cam's start there)."""
+        y = self.setpoints
+        x = min(max(count, 0.0), self.length) / self.length * (len(y) - 1)
+        i = min(int(x), len(y) - 2)
+        return here + self.amplitude * (y[i] + (x - i) * (y[i + 1] - y[i]) - y[0])
+
+    def reach_mm(self) -> tuple[float, float]:
+        y = self.setpoints
+        return (self.amplitude * (min(y) - y[0]) / MM, self.amplitude * (max(y) - y[0]) / MM)
+
+
+@dataclass
 class Step:
     kind: str
     label: str
@@ -63,12 +103,17 @@ class Step:
     entry: int = 0
     target_mm: float | None = None          # where the axis must be at the end of the step
     curve: CurveRun | None = None
+    cam: CamRun | None = None
     chain: list[int] = field(default_factory=list)   # CT: the entries the sequence runs
     span_mm: tuple[float, float] | None = None       # the lowest and highest position the step visits
+    hold_ms: int = 0                                 # jog, velocity: T_PlcStep.Hold
+    reach_mm: tuple[float, float] | None = None      # jog, velocity: how far back / forward it may go from
+                                                     # where the step starts (no target: a bound)
 
     def plc_value(self) -> dict:
         return {"KIND": STEP_KINDS[self.kind], "POSITION": self.position_mm, "VELOCITY": self.velocity,
-                "ACCELERATION": self.acceleration, "CURVEID": self.curve_id, "ENTRY": self.entry}
+                "ACCELERATION": self.acceleration, "CURVEID": self.curve_id, "ENTRY": self.entry,
+                "HOLD": self.hold_ms * 1_000_000}
 
 
 @dataclass
@@ -114,30 +159,53 @@ def _same_curve(a, b) -> bool:
     return a.info_block == b.info_block and list(a.setpoints) == list(b.setpoints)
 
 
-def plan(pvl, position_mm: float = 50.0, settings=None, others=()) -> Plan:
+def _lacking(c, others) -> list:
+    """The other nodes' PVL files that do not hold curve `c` as it is (per-node datasets)."""
+    return [o for o in others if not any(oc.curve_id == c.curve_id and _same_curve(oc, c) for oc in o.curves)]
+
+
+def plan(pvl, position_mm: float = 50.0, settings=None, others=(), fb_steps: bool = True) -> Plan:
     """The steps; `settings`: the emulated drives' MotionSettings whose stroke the plan is fitted into.
     `others`: the PVL files of other nodes on the bus (per-node datasets; every axis runs the same steps): a
     curve or command-table step only where each of them holds the same curve or command table (a B1100 file
-    holds neither)."""
+    holds neither). `fb_steps` False: without the jog, velocity, trigger, probe and cam steps (the job as it was
+    before them: their parameter writes and SDO reads start on every axis in the same scan, a burst the bus
+    budget does not plan, docs/motion.md)."""
     steps = [Step("setup", "set up the PDOs (TxPDO1 event timer 50 ms)"), Step("power", "power (MC_Power)"),
              Step("home", "home (MC_Home)")]
     not_run: list[str] = []
     move = dict(velocity=MOVE_VELOCITY, acceleration=MOVE_ACCELERATION)
     steps.append(Step("move", f"move to {position_mm:g} mm", position_mm=position_mm, target_mm=position_mm,
                       **move))
+    b1100 = [f for f in (pvl, *others) if f.drive_type.name != "E1100"]
+    if fb_steps and b1100:
+        # the trigger, probe and cam rows of the catalogue are E1100 only (seed 004 4.2 has no B1100 mark for
+        # them, [MC] 5.5: no cams on a B1100), and every axis runs the same steps
+        fb_steps = False
+        not_run.append("jog, velocity, trigger, probe and cam steps: not on every axis (a B1100 node: "
+                       f"{', '.join(f.filename or 'PVL' for f in b1100)})")
+    steps += _jog_and_velocity() if fb_steps else []
     offset = _param(pvl, P_CURVE_OFFSET, 0)
     time_scale = _param(pvl, P_CURVE_TIME_SCALE, 10000)
     amplitude = _param(pvl, P_CURVE_AMPLITUDE, 1000) / 1000.0
     for c in pvl.curves:
         info = c.info
-        lacking = [o for o in others if not any(oc.curve_id == c.curve_id and _same_curve(oc, c) for oc in o.curves)]
-        if lacking:
+        if _lacking(c, others):
             not_run.append(f"curve {c.curve_id} {info.name}: not on every axis (per-node PVL files: "
-                           f"{', '.join(o.filename or 'PVL' for o in lacking)})")
+                           f"{', '.join(o.filename or 'PVL' for o in _lacking(c, others))})")
+        elif info.object_type == CAM_OBJECT_TYPE and not fb_steps:
+            not_run.append(f"curve {c.curve_id} {info.name}: a cam profile (object type 0103h): the cam steps are off")
+        elif info.object_type == CAM_OBJECT_TYPE:
+            cam = CamRun(c.curve_id, info.name, list(c.setpoints), info.x_length, amplitude)
+            steps.append(Step("cam", f"follow cam {c.curve_id} {info.name} on the master encoder (MC_CamIn)",
+                              curve_id=c.curve_id, hold_ms=CAM_HOLD_MS, cam=cam, reach_mm=cam.reach_mm()))
+    for c in pvl.curves:
+        info = c.info
+        if info.object_type == CAM_OBJECT_TYPE or _lacking(c, others):
             continue
         if info.object_type != 0x0003:
-            not_run.append(f"curve {c.curve_id} {info.name}: object type {info.object_type:04X}h (a cam profile) "
-                           "follows a master encoder: the job has no cam step (plc_project drives no encoder cam)")
+            not_run.append(f"curve {c.curve_id} {info.name}: object type {info.object_type:04X}h is neither a "
+                           "time curve nor a cam")
             continue
         run = CurveRun(c.curve_id, info.name, list(c.setpoints), info.x_length * 10_000 * time_scale // 10000,
                        offset, amplitude)
@@ -175,13 +243,38 @@ def plan(pvl, position_mm: float = 50.0, settings=None, others=()) -> Plan:
     return Plan(steps, not_run, fit(pvl, spans, settings))
 
 
+def _jog_and_velocity() -> list[Step]:
+    """Jog forward, jog back (MC_Jog held JOG_HOLD_MS), a velocity move kept VELOCITY_HOLD_MS (MC_MoveVelocity)
+    and the stop that ends it; each bounded by how far it can go: the hold at full speed plus the ramp down
+    (the velocity move also its ramp up and the PLC's slack)."""
+    jog = JOG_VELOCITY * JOG_HOLD_MS / 1000 + JOG_VELOCITY ** 2 / (2 * JOG_ACCELERATION)
+    vel = (VELOCITY ** 2 / (2 * VELOCITY_ACCELERATION) + VELOCITY * (VELOCITY_HOLD_MS / 1000 + VELOCITY_SLACK_S)
+           + VELOCITY ** 2 / (2 * STOP_DECELERATION))
+    return [Step("jog", f"jog forward at {JOG_VELOCITY:g} mm/s for {JOG_HOLD_MS} ms (MC_Jog)",
+                 velocity=JOG_VELOCITY, acceleration=JOG_ACCELERATION, hold_ms=JOG_HOLD_MS, reach_mm=(0.0, jog)),
+            Step("jog", f"jog back at {JOG_VELOCITY:g} mm/s for {JOG_HOLD_MS} ms (MC_Jog)",
+                 velocity=-JOG_VELOCITY, acceleration=JOG_ACCELERATION, hold_ms=JOG_HOLD_MS, reach_mm=(-jog, 0.0)),
+            Step("velocity", f"move at {VELOCITY:g} mm/s for {VELOCITY_HOLD_MS} ms (MC_MoveVelocity)",
+                 velocity=VELOCITY, acceleration=VELOCITY_ACCELERATION, hold_ms=VELOCITY_HOLD_MS,
+                 reach_mm=(0.0, vel)),
+            Step("stop", "stop the velocity move (MC_Stop)", acceleration=STOP_DECELERATION),
+            # 02Axh: the target only (01Axh's 16 bytes do not fit the RxPDOs); at the velocity move's 14BEh..14C0h
+            Step("trigger", f"move to {TRIGGER_POSITION_MM:g} mm on trigger X4.6 (02Axh), the job raises it",
+                 position_mm=TRIGGER_POSITION_MM, target_mm=TRIGGER_POSITION_MM),
+            Step("probe", "touch probe on X4.5 (MC_TouchProbe), the job pulses it")]
+
+
 def _spans(steps: list[Step]) -> None:
     """Each move's span: from where the previous step left the axis to its target (the first from its target:
-    homing left the axis inside the stroke); a CT sequence from there over its targets."""
-    here = None
+    homing left the axis inside the stroke); a CT sequence from there over its targets; a jog or velocity move
+    from where the axis may be (an interval: they have no target) over how far it may go."""
+    here = None                     # (lowest, highest) where the axis may be
     for s in steps:
-        if s.kind == "move" or (s.kind == "ct" and s.span_mm is not None):
-            pts = [s.target_mm] + ([here] if here is not None else []) + (list(s.span_mm) if s.span_mm else [])
+        if s.kind in ("move", "trigger") or (s.kind == "ct" and s.span_mm is not None):
+            pts = [s.target_mm] + (list(here) if here is not None else []) + (list(s.span_mm) if s.span_mm else [])
             s.span_mm = (min(pts), max(pts))
+        elif s.reach_mm is not None and here is not None:
+            s.span_mm = (here[0] + s.reach_mm[0], here[1] + s.reach_mm[1])
+            here = s.span_mm
         if s.target_mm is not None:
-            here = s.target_mm
+            here = (s.target_mm, s.target_mm)

@@ -109,7 +109,7 @@ class MotionReport:
         t0 = self.m.t0_ns
         samples = drive.mc.trajectory.between(t0 + off, self.m.t1_ns + off)
         t = [(s.t_ns - off - t0) / 1e9 for s in samples]
-        fig, (top, bottom) = plt.subplots(2, 1, figsize=(11, 7), sharex=True, height_ratios=(3, 1))
+        fig, (top, mid, bottom) = plt.subplots(3, 1, figsize=(11, 9), sharex=True, height_ratios=(3, 1.5, 1))
         top.plot(t, [s.demand / MM for s in samples], label="demand", linewidth=1.0)
         top.plot(t, [s.actual / MM for s in samples], label="actual", linewidth=1.0, alpha=0.8)
         labelled = False
@@ -123,6 +123,17 @@ class MotionReport:
                 labelled = True
         for r in ax.steps:
             top.axvline((r.t0_ns - t0) / 1e9, color="0.85", linewidth=0.6)
+        # the input edges the job raised (trigger X4.6, capture X4.5) and the position the PLC read on X4.5
+        edges = [r for r in ax.steps if r.edge_ns]
+        for k, r in enumerate(edges):
+            x = (r.edge_ns - off - t0) / 1e9
+            top.axvline(x, color="tab:purple", linestyle=":", linewidth=1.0,
+                        label=None if k else "the job: input edge (X4.6, X4.5) or conveyor start")
+            if r.probed_mm is not None:
+                top.plot([x], [r.probed_mm], "o", color="tab:purple", markersize=5,
+                         label="position captured (MC_TouchProbe)")
+        mid.plot(t, [s.demand_velocity / MM for s in samples], color="tab:green", linewidth=0.8)
+        mid.set_ylabel("demand velocity (mm/s)")
         top.set_ylabel("position (mm)")
         top.set_title(f"axis {ax.axis} (node {ax.node_id}): the motion job")
         top.legend(loc="best")
