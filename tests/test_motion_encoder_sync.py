@@ -138,3 +138,16 @@ def test_winding_adaptation_moves_the_reversal_positions_inwards_until_stopped()
     want = [right, left + 1 * MM, right - 2 * MM, left + 3 * MM, right - 4 * MM, left + 4 * MM, right - 4 * MM]
     assert got[:len(want)] == pytest.approx(want, abs=60), [round(x) for x in got]
     assert mc.error_code == 0
+
+
+def test_winding_without_a_curve_at_revolutions():
+    # 301xh (seed 004 4.3.140, layout INFERRED as 311xh without the curve): a straight traverse that starts at
+    # the given revolution, as 311xh with a linear curve would
+    link = make_link()
+    mc = link.drive.mc
+    link.command(C.WINDING_START_AT_REVOLUTIONS, revolutions=2)
+    link.advance(2 * MS)
+    assert mc.error_code == 0 and 0x301 in [h >> 4 for _, h, _ in mc.executed]
+    g = mc.gen
+    assert type(g).__name__ == "WindingFollower" and g.shape is None
+    assert g.start_count == mc.encoder.counts(g.origin_ns) + 2 * g.cpr

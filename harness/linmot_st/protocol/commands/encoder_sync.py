@@ -4,8 +4,9 @@ follow a signal from outside the axis, the master encoder or a force sensor.
 - Position indexing 070xh..07Fxh ([MC] 4.3.69..72): the target follows the master-encoder counter through a VAI;
   07Exh/07Fxh end it with a VAI / predefined VAI go-to.
 - Winding: 304h, 305h, 310h, 311h from [MC] 4.3.213..216 (headers and 310h/311h's fields only). 300h/301h
-  (winding without a curve) are in the seed's TOC only, with no layout: not in the catalogue (every row cites
-  [MC] 4.3); the emulator's winding model runs them as 310h/311h without a curve once a source gives them.
+  (winding with the default parameters, no curve) are in the seed's TOC only (4.3.139/140), with no layout:
+  INFERRED as 310h/311h without the curve ID (300h none, 301h the revolutions to start at), run by the same
+  winding model with a triangular traverse (docs/emulator.md 13.10).
 - Force control 380xh..385xh ([MC] 4.3.217..222, "F": the Force Control software key); 383xh/385xh switch to
   the command's target force at the limit, the others to the limit itself.
 E1100 only (the B1100 column of [MC] 4.2 has none of them).
@@ -19,6 +20,8 @@ START_VAI_ENCODER_POSITION_INDEXING = 0x070
 START_PREDEF_VAI_ENCODER_POSITION_INDEXING = 0x071
 STOP_POSITION_INDEXING_VAI_GO_TO_POS = 0x07E
 STOP_POSITION_INDEXING_PREDEF_VAI_GO_TO_POS = 0x07F
+WINDING_START = 0x300
+WINDING_START_AT_REVOLUTIONS = 0x301
 WINDING_STOP_ADAPTATION = 0x304
 WINDING_RESTART_ADAPTATION = 0x305
 CURVE_WINDING_START = 0x310
@@ -53,6 +56,10 @@ register(
          "[MC] 4.3.213", homing=False),
     _row(WINDING_RESTART_ADAPTATION, "Encoder Winding Restart Adaptation Of Left/Right Position and Disturbance",
          (), _W, "[MC] 4.3.214", homing=False),
+    _row(WINDING_START, "Encoder Winding Start With Default Parameters", (), _W,
+         "seed 004 4.3.139 (TOC only; layout INFERRED: 310h without the curve)"),
+    _row(WINDING_START_AT_REVOLUTIONS, "Encoder Winding Start With Default Parameters At Revolutions", (_REVS,), _W,
+         "seed 004 4.3.140 (TOC only; layout INFERRED: 311h without the curve)"),
     _row(CURVE_WINDING_START, "Encoder Curve Winding Start With Default Parameters", (_ID,), _W, "[MC] 4.3.215"),
     _row(CURVE_WINDING_START_AT_REVOLUTIONS, "Encoder Curve Winding Start With Default Parameters At Revolutions",
          (_ID, _REVS), _W, "[MC] 4.3.216"),
