@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from linmot_st.emulator import DriveTimings, E1100Drive, build_entry, load_profile
-from linmot_st.emulator.motion import MotionSettings, ct_language
+from linmot_st.emulator.linmot.motion import MotionSettings, ct_language
 from linmot_st.emulator.testing import MotionLink
 from linmot_st.protocol import commands as C
 from linmot_st.protocol import words as W

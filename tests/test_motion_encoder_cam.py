@@ -188,7 +188,7 @@ def test_the_b1100_has_no_cam_motions():
 def test_the_fast_path_runs_a_cam_as_the_generic_cycle_does():
     """The quiet cycles (fast_path.py) compute the cam follower ahead: the trajectory is the same as with every
     cycle run one by one (MotionSettings.quiet_cycles False), sample for sample."""
-    from linmot_st.emulator.motion import MotionSettings
+    from linmot_st.emulator.linmot.motion import MotionSettings
     runs = []
     for quiet in (True, False):
         defaults = {0x1194: 2, 0x146F: 280 * MM, 0x146E: -10 * MM, 0x2041: 2, U.P_CAM_MODE: 1,

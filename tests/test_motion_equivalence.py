@@ -11,7 +11,7 @@ import pytest
 from linmot_st.bus import Frame, SimBus
 from linmot_st.bus.nodes import ScriptedNode
 from linmot_st.emulator import DriveTimings, E1100Drive, load_profile
-from linmot_st.emulator.motion import MotionSettings
+from linmot_st.emulator.linmot.motion import MotionSettings
 from linmot_st.protocol import commands as C
 
 MS = 1_000_000

@@ -347,7 +347,7 @@ def _bus_run(quiet: bool):
 
     from linmot_st.bus import Frame, SimBus
     from linmot_st.bus.nodes import ScriptedNode
-    from linmot_st.emulator.motion import MotionSettings
+    from linmot_st.emulator.linmot.motion import MotionSettings
 
     def cmd(cid, count, **fields):
         raw = C.encode(cid, count, **fields).ljust(10, b"\0")
@@ -401,7 +401,7 @@ def test_x43_as_brake_output_follows_operation_enabled():
 
 def test_vai_go_to_analog_pos_can_follow_the_input():
     """MotionSettings(analog_target_follows=True): the target follows X4.4 until another motion replaces it."""
-    from linmot_st.emulator.motion import MotionSettings
+    from linmot_st.emulator.linmot.motion import MotionSettings
 
     values = {0x1194: 2, 0x146F: 280 * MM, 0x146E: -10 * MM, 0x14DC: 0, 0x14DD: 200 * MM, **PREDEF}
     d = E1100Drive(1, load_profile().with_defaults(values), timings=DriveTimings.fast(),

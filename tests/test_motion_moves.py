@@ -23,7 +23,7 @@ CYCLE = MS            # the default MC cycle
 
 
 def homed_link(defaults: dict | None = None, **motion) -> MotionLink:
-    from linmot_st.emulator.motion import MotionSettings
+    from linmot_st.emulator.linmot.motion import MotionSettings
 
     values = {0x1194: 2, 0x146F: 280 * MM, 0x146E: -10 * MM}         # position limits inside the stroke
     values.update(defaults or {})

@@ -13,7 +13,7 @@ import pytest
 
 from linmot_st.bus.frame import Frame
 from linmot_st.emulator import DriveTimings, E1100Drive, load_profile
-from linmot_st.emulator.motion.settings import MotionSettings
+from linmot_st.emulator.linmot.motion.settings import MotionSettings
 from linmot_st.emulator.testing import MotionLink
 from linmot_st.protocol import commands as C
 from linmot_st.protocol import words as W

@@ -15,7 +15,7 @@ import pytest
 from linmot_st.cli import main
 from linmot_st.commission.project import build_project, prepare
 from linmot_st.commission.runner import RunOptions
-from linmot_st.emulator.motion import MotionSettings
+from linmot_st.emulator.linmot.motion import MotionSettings
 from linmot_st.motion.check import check_motion
 from linmot_st.motion.job import run_job
 from linmot_st.motion.plan import plan

@@ -258,7 +258,7 @@ def test_a_stop_ends_the_running_motion_so_the_queued_one_starts_and_a_newer_que
 
 
 def test_with_the_setting_a_stop_drops_the_queued_move():
-    from linmot_st.emulator.motion import MotionSettings
+    from linmot_st.emulator.linmot.motion import MotionSettings
 
     values = {0x1194: 2, 0x146F: 280 * MM, 0x146E: -10 * MM, 0x2041: 2}
     d = E1100Drive(1, load_profile().with_defaults(values), timings=DriveTimings.fast(),

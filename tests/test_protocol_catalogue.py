@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from linmot_st.emulator import DriveTimings, E1100Drive, load_profile
-from linmot_st.emulator.motion.interpreter import HANDLERS
+from linmot_st.emulator.linmot.motion.interpreter import HANDLERS
 from linmot_st.emulator.testing import MotionLink
 from linmot_st.protocol import commands as C
 from linmot_st.protocol import generate

@@ -24,8 +24,8 @@ from ..bus.bench import RequestLoop, run_loop
 from .linmot.curves import Curve
 from .linmot.drive import E1100Drive
 from .models import make_drive
-from .motion import bench as motion_bench
-from .motion import cam_bench, stream_bench
+from .linmot.motion import bench as motion_bench
+from .linmot.motion import cam_bench, stream_bench
 
 S = 1_000_000_000
 RUNS = 5

@@ -56,7 +56,7 @@ class Stroke:
 
     def settings(self, base=None):
         """The emulated drive's MotionSettings with this power-on position."""
-        from linmot_st.emulator.motion import MotionSettings
+        from linmot_st.emulator.linmot.motion import MotionSettings
         return (base or MotionSettings()).with_(start_position_pu=self.start_position_pu)
 
     def store_home(self, drive) -> None:
@@ -90,7 +90,7 @@ def drive_defaults():
 def fit(pvl, spans: list[tuple[int, str, float, float]], settings=None, defaults=None) -> Stroke:
     """Place the emulated mechanics for steps visiting `spans` (step number, label, lowest mm, highest mm;
     the home step not among them: it is where the stroke is fixed)."""
-    from linmot_st.emulator.motion import MotionSettings
+    from linmot_st.emulator.linmot.motion import MotionSettings
     s = settings or MotionSettings()
     defaults = defaults or drive_defaults()
     length = (s.stop_positive_pu - s.stop_negative_pu) / MM

@@ -20,7 +20,7 @@ from typing import Any, Callable
 
 DRIVE_SIGNALS = ("position", "velocity", "state", "status_word", "nmt")
 DRIVE_DEFAULT = ("position", "velocity", "state")
-PU_PER_MM = 10_000                  # the emulator's position unit is 0.1 um (emulator/motion/settings.py)
+PU_PER_MM = 10_000                  # the emulator's position unit is 0.1 um (emulator/linmot/motion/settings.py)
 _REAL_TYPES = {"REAL", "LREAL"}
 _INT_BITS = {"SINT": 8, "USINT": 8, "BYTE": 8, "INT": 16, "UINT": 16, "WORD": 16, "DINT": 32, "UDINT": 32,
              "DWORD": 32, "LINT": 64, "ULINT": 64, "LWORD": 64, "TIME": 64, "DATE": 64, "TOD": 64, "DT": 64}

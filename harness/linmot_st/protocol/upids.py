@@ -49,7 +49,7 @@ V_CAM_ENABLED = 0x1BA9                                               # [MC] 5.5.
 V_MASTER_ENCODER_COUNTS, V_MASTER_ENCODER_SPEED = 0x1BA0, 0x1BA1     # INVENTED
 P_WINDING_LEFT, P_WINDING_RIGHT, P_WINDING_PITCH = 0x1540, 0x1541, 0x1542    # INVENTED ([MC] gives headers only)
 V_ACTUAL_FORCE = 0x1BFF                 # zylos146/CANFuck docs/a1100-pdo-config.md (actual force, 0.1 N)
-# the drive's I/O (emulator/linmot/io.py) and the triggered commands (emulator/motion/triggered.py)
+# the drive's I/O (emulator/linmot/io.py) and the triggered commands (emulator/linmot/motion/triggered.py)
 P_TRIGGER_MODE = 0x170C                                              # [MC] 7.2.2
 P_TRIG_RISE_INHIBIT, P_TRIG_FALL_INHIBIT = 0x170D, 0x170E            # [MC] 7.2.2.2
 P_TRIG_RISE_DELAY, P_TRIG_FALL_DELAY = 0x170F, 0x1710                # [MC] 7.2.2.3

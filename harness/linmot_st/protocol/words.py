@@ -2,7 +2,7 @@
 word, status word and warn word bits, and the error codes the motion model raises.
 
 Only numbers live here (the catalogue: the PLC library and the emulated drive share them); the behaviour is in
-the drive's MC model (emulator/motion/).
+the drive's MC model (emulator/linmot/motion/).
 """
 
 from __future__ import annotations

@@ -25,7 +25,7 @@ from .errorlog import ErrorLog
 from .io import DriveIO, IoSettings
 from .manufacturer import ManufacturerObjects
 from ..cia301.sdo import Reply
-from ..motion import MotionControl, MotionSettings
+from .motion import MotionControl, MotionSettings
 from ...protocol.words import ERROR, SETUP_ERROR
 from ...protocol.upids import P_BRAKE_OPERATION_ENABLED
 from .options import ProtocolOptions

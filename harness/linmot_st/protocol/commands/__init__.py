@@ -8,7 +8,7 @@ these rows (`python -m linmot_st.protocol --write`); tests/vectors/motion_comman
 both are checked against.
 
 To add a command: one row in its group's module (a new group: a module here and one import line below); a
-command of a new kind also needs its handler in emulator/motion/interpreter.py.
+command of a new kind also needs its handler in emulator/linmot/motion/interpreter.py.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Command-table control and waits (seed 004 4.2 master IDs 20h, 21h; [MC] 4.3.163, 168..170; past the seed's
 cut-off: E1100 from the TOC, B1100 unknown). The waits act only inside a command-table sequence
-(emulator/motion/ct_runner.py); from the interface they do nothing."""
+(emulator/linmot/motion/ct_runner.py); from the interface they do nothing."""
 
 from __future__ import annotations
 

@@ -1,7 +1,7 @@
 """The command-table language ([MC] 4.3.124..127, 4.3.166..167, 4.3.173..211, [MC] 6; seed 004 TOC 4.3.120..123,
 4.3.144..189): modify an entry in RAM, the waits on a position, velocity or current level, the two variables and
 the IF jumps, and the VAI to a variable's position. Layouts from [MC] 4.3 (spec/linmot-motion-commands.md rows
-120..123, 144..189). What each does is emulator/motion/ct_language.py's; the waits hold only a command-table
+120..123, 144..189). What each does is emulator/linmot/motion/ct_language.py's; the waits hold only a command-table
 sequence (Kind.WAIT, ct_runner.py).
 
 Left out: 213xh/214xh (the trigger waits: the triggered group's rows, protocol/commands/triggered.py); the [MC]-only 218xh/219xh, 24Exh, 256xh/257xh (named in the overview 4.2 only, no layout) and 266xh

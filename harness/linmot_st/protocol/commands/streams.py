@@ -1,6 +1,6 @@
 """P, PV and PVA streams (seed 004 4.2 master ID 03h; [MC] 4.3.38..44, 5.4): the PLC sends one setpoint per
 cycle, the drive stamps it with its receive time and replays the stream 1.5 periods late, interpolating finely
-between setpoints (emulator/motion/stream.py). On CANopen only with synchronous PDOs, transmission type 1
+between setpoints (emulator/linmot/motion/stream.py). On CANopen only with synchronous PDOs, transmission type 1
 ([MC] 5.4 footnote): the drive then takes its RxPDOs on SYNC, so the stamps are the SYNC times.
 
 Beside the rows: each command's period range and whether it takes the configured period (UPID 14E6h) instead

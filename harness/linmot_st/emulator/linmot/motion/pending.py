@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ...protocol import words as W
+from ....protocol import words as W
 from .setpoints import VaPlan
 
 

@@ -1,17 +1,17 @@
 """The cost of a cam motion: one emulated E1100 following a master encoder with an encoder cam (modulo mode, one
 cam per revolution of an 8000-count encoder turning at 2 revolutions/s), on a 1 Mbit/s SimBus with a SYNC every
 4 ms and TxPDO2 on every SYNC, as the motion bench (bench.py). The figure is simulated seconds per wall second,
-best of the runs (`make bench`; `python -m linmot_st.emulator.motion.cam_bench`).
+best of the runs (`make bench`; `python -m linmot_st.emulator.linmot.motion.cam_bench`).
 """
 
 from __future__ import annotations
 
 import time
 
-from ..linmot.curves import Curve
-from ..linmot.master_encoder import ConstantSpeed
-from ...protocol import commands as C
-from ...protocol import upids as U
+from ..curves import Curve
+from ..master_encoder import ConstantSpeed
+from ....protocol import commands as C
+from ....protocol import upids as U
 from .bench import S, _setup
 
 SETPOINTS = [0, 100_000, 400_000, 500_000, 400_000, 100_000, 0]    # 0 -> 50 mm -> 0 over one revolution

@@ -3,7 +3,7 @@ UPIDs it does not know)."""
 
 from __future__ import annotations
 
-from ...protocol.upids import V_ACTUAL_FORCE, V_CAM_ENABLED, V_MASTER_ENCODER_COUNTS, V_MASTER_ENCODER_SPEED
+from ....protocol.upids import V_ACTUAL_FORCE, V_CAM_ENABLED, V_MASTER_ENCODER_COUNTS, V_MASTER_ENCODER_SPEED
 from .encoder_cams import cam_operating
 from .force_control import force_variable
 

@@ -11,10 +11,10 @@ from __future__ import annotations
 
 from typing import Callable
 
-from ...protocol import commands as C
-from ...protocol import words as W
-from ...protocol.commands import CommandDef, Kind, Start, Target
-from ...protocol.upids import (
+from ....protocol import commands as C
+from ....protocol import words as W
+from ....protocol.commands import CommandDef, Kind, Start, Target
+from ....protocol.upids import (
     P_CURVE_AMPLITUDE, P_CURVE_OFFSET, P_CURVE_TIME_SCALE, P_HOME_POSITION, P_PREDEF_ACC, P_PREDEF_DEC,
     P_PREDEF_VMAX, P_QUICK_STOP_DEC, P_SCALE_ACC, P_SCALE_POS, P_SCALE_VEL,
 )

@@ -17,10 +17,10 @@ import operator
 import struct
 from typing import Callable
 
-from ...protocol import commands as C
-from ...protocol import words as W
-from ...protocol.commands import CommandDef, Start
-from ...protocol.upids import V_DEMAND_CURRENT
+from ....protocol import commands as C
+from ....protocol import words as W
+from ....protocol.commands import CommandDef, Start
+from ....protocol.upids import V_DEMAND_CURRENT
 from .units import ACC_RAW, VEL_RAW
 
 Signal = Callable[[object], float]

@@ -12,10 +12,10 @@ from __future__ import annotations
 
 import struct
 
-from ...protocol import commands as C
-from ...protocol import words as W
-from ...protocol.commands import CommandDef
-from ..linmot.curves import Curve
+from ....protocol import commands as C
+from ....protocol import words as W
+from ....protocol.commands import CommandDef
+from ..curves import Curve
 
 NO_CURVE = 0x0FFF
 

@@ -6,8 +6,8 @@ section 13.
 
 from __future__ import annotations
 
-from ...protocol import words as W
-from ...protocol.upids import (
+from ....protocol import words as W
+from ....protocol.upids import (
     P_JOG_VELOCITY, P_JOG_INCREMENT, P_HOMING_MODE, P_HOME_POSITION, P_INITIAL_POSITION, P_HOMING_VMAX,
     P_HOMING_ACC, P_GO_TO_POSITION, P_CLEARANCE_1, P_CLEARANCE_2, P_QUICK_STOP_DEC, P_LIMIT_POSITIVE,
     P_LIMIT_NEGATIVE, P_READY_TO_OPERATE_MODE,

@@ -15,8 +15,8 @@ from __future__ import annotations
 
 import random
 
-from ...protocol import commands as C
-from ...protocol.commands import CommandDef
+from ....protocol import commands as C
+from ....protocol.commands import CommandDef
 from .setpoints import VaPlan
 from .stepwise import StepwisePlan
 from .units import ACC_RAW, VEL_RAW

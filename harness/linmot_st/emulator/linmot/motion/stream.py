@@ -19,10 +19,10 @@ from __future__ import annotations
 
 from bisect import bisect_right
 
-from ...protocol import commands as C
-from ...protocol import words as W
-from ...protocol.commands import CommandDef
-from ...protocol.upids import P_STREAM_PERIOD
+from ....protocol import commands as C
+from ....protocol import words as W
+from ....protocol.commands import CommandDef
+from ....protocol.upids import P_STREAM_PERIOD
 from .units import ACC_RAW, VEL_RAW
 
 NS = 1e-9

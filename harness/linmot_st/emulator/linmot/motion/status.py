@@ -7,8 +7,8 @@ from __future__ import annotations
 
 import struct
 
-from ...protocol import words as W
-from ...protocol.upids import (
+from ....protocol import words as W
+from ....protocol.upids import (
     P_SCALE_POS, P_RANGE1_UPID, P_RANGE1_MIN, P_RANGE1_MAX, V_STATE_VAR, V_ACTUAL_POSITION, V_DEMAND_CURRENT,
     V_DEMAND_POSITION_16, V_ACTUAL_POSITION_16, V_STATUS_WORD, V_CONTROL_WORD, V_WARN_WORD, V_LOGGED_ERROR,
     V_DEMAND_POSITION, V_TARGET_POSITION, V_POSITION_DIFFERENCE, V_DEMAND_VELOCITY, V_ACTUAL_VELOCITY,

@@ -19,8 +19,8 @@ from __future__ import annotations
 
 from typing import Callable
 
-from ...protocol import words as W
-from ...protocol.upids import P_LIMIT_SWITCH_ERROR
+from ....protocol import words as W
+from ....protocol.upids import P_LIMIT_SWITCH_ERROR
 
 LIMIT_ERRORS = {"X4.8": 0x0087, "X4.9": 0x0088}     # [MC] 10: Limit Switch In / Out High
 Action = Callable[[int], bool]                       # run at t: False when it raised an error

@@ -7,8 +7,8 @@ from __future__ import annotations
 
 from typing import Callable
 
-from ...protocol.commands import CommandDef, Kind, Target
-from ...protocol.upids import (
+from ....protocol.commands import CommandDef, Kind, Target
+from ....protocol.upids import (
     P_ACTIVE_CONTROLLER_SET, P_MAX_CURRENT_SET_A, P_MAX_CURRENT_SET_B, P_SCALE_POS, P_SCALE_VEL,
 )
 from .units import ACC_RAW, VEL_RAW

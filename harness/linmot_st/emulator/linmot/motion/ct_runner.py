@@ -15,9 +15,9 @@ from __future__ import annotations
 import struct
 from typing import Callable
 
-from ...protocol import commands as C
-from ...protocol import words as W
-from ...protocol.commands import Kind
+from ....protocol import commands as C
+from ....protocol import words as W
+from ....protocol.commands import Kind
 from .ct_language import WAITS, if_target
 
 END = 0xFFFF

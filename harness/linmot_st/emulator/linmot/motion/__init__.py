@@ -3,7 +3,7 @@ setpoint generation, the axis that follows it, and the trajectory record (the PD
 (docs/emulator.md section 13).
 
     from linmot_st.emulator import E1100Drive
-    from linmot_st.emulator.motion import MotionSettings
+    from linmot_st.emulator.linmot.motion import MotionSettings
     drive = E1100Drive(1, motion=MotionSettings(bandwidth_hz=40))
     drive.mc.trajectory.samples        # what the axis did
 """

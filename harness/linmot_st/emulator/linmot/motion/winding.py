@@ -14,10 +14,10 @@ from __future__ import annotations
 
 import bisect
 
-from ...protocol import commands as C
-from ...protocol import words as W
-from ...protocol.commands import CommandDef
-from ...protocol.upids import P_WINDING_LEFT, P_WINDING_PITCH, P_WINDING_RIGHT
+from ....protocol import commands as C
+from ....protocol import words as W
+from ....protocol.commands import CommandDef
+from ....protocol.upids import P_WINDING_LEFT, P_WINDING_PITCH, P_WINDING_RIGHT
 from .setpoints import _demands_by_at
 
 NEVER = 1 << 62

@@ -7,8 +7,8 @@ other motion command) end it; 07Exh/07Fxh then go to their target with a VAI / p
 
 from __future__ import annotations
 
-from ...protocol import commands as C
-from ...protocol.commands import CommandDef
+from ....protocol import commands as C
+from ....protocol.commands import CommandDef
 from .stepwise import StepwisePlan, track
 from .units import ACC_RAW, VEL_RAW
 

@@ -16,10 +16,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from ...protocol import commands as C
-from ...protocol import words as W
-from ...protocol.commands import CommandDef
-from ...protocol.upids import (
+from ....protocol import commands as C
+from ....protocol import words as W
+from ....protocol.commands import CommandDef
+from ....protocol.upids import (
     P_CAM_MODE, P_CAM_MODULO_LENGTH, P_CURVE_AMPLITUDE, P_CURVE_OFFSET, P_QUICK_STOP_DEC, P_TRIG_CAM_CURVE_FALL,
     P_TRIG_CAM_CURVE_RISE, P_TRIG_CAM_DELAY_FALL, P_TRIG_CAM_DELAY_RISE,
 )
