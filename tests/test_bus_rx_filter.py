@@ -107,17 +107,21 @@ def test_the_demo_puts_the_same_frames_on_the_bus_with_and_without_the_drives_fi
 
     from linmot_st.commission.runner import RunOptions
     from linmot_st.commission.testing import project_build
-    from linmot_st.motion.job import motion_phase, run
+    from linmot_st.motion.budget import job_budget
+    from linmot_st.motion.job import job_drives, motion_phase, run
     from linmot_st.motion.plan import plan as make_plan
     from linmot_st.pvl import load_pvl
 
     pvl = load_pvl(REPO / "examples" / "two_axes.pvl")
     steps = make_plan(pvl, 50.0)
+    inhibit = job_budget(axes, 500_000)[1].interval_100us       # TxPDO2's inhibit time as the job plans it
     build = project_build("builtin")
     out = {}
     for filters in (False, True):
         monkeypatch.setattr(bus_pkg, "SimBus", bus_with(filters))
-        res = run(pvl, RunOptions(axes=axes, timings="real"), build, after=motion_phase(steps, 60.0))
+        opts = RunOptions(axes=axes, timings="real")
+        res = run(pvl, opts, build, after=motion_phase(steps, 60.0, None, inhibit),
+                  drive_factory=job_drives(steps, opts))
         assert res.after is not None and res.after.finished
         out[filters] = res
     plain, filtered = out[False], out[True]

@@ -194,22 +194,25 @@ def test_the_motion_job_is_the_same_with_idle_scans_in_c(idle_build):
     motion steps): the whole bus trace, every phase and every step identical."""
     from linmot_st.commission.testing import project_build
     from linmot_st.commission.runner import RunOptions
-    from linmot_st.motion.job import motion_phase, run
+    from linmot_st.motion.budget import job_budget
+    from linmot_st.motion.job import job_drives, motion_phase, run
     from linmot_st.motion.plan import plan as make_plan
     from linmot_st.pvl import load_pvl
 
     backend = idle_build.backend
     pvl = load_pvl(REPO / "examples" / "two_axes.pvl")
     steps = make_plan(pvl, 50.0)
+    inhibit = job_budget(2, 500_000)[1].interval_100us          # TxPDO2's inhibit time as the job plans it
     out = {}
     for fast in (False, True):
         idle = []
 
-        def after(plc, sim, drives, _motion=motion_phase(steps, 60.0)):
+        def after(plc, sim, drives, _motion=motion_phase(steps, 60.0, None, inhibit)):
             idle.append(sim.idle_scans)
             return _motion(plc, sim, drives)
 
-        res = run(pvl, RunOptions(axes=2, timings="real", fast_idle=fast), project_build(backend), after=after)
+        opts = RunOptions(axes=2, timings="real", fast_idle=fast)
+        res = run(pvl, opts, project_build(backend), after=after, drive_factory=job_drives(steps, opts))
         assert res.after is not None and res.after.finished
         out[fast] = (res, idle[0])
     (slow, _), (fast, idle) = out[False], out[True]

@@ -266,6 +266,15 @@ def placed_drives(stroke, opts: RunOptions, datasets=None, trigger_mode: int | N
     return factory
 
 
+def job_drives(plan: Plan, opts: RunOptions, datasets=None):
+    """The drive factory of the job: the emulated drives with the mechanics the plan's stroke places, the trigger
+    input wired when a step needs it, the master encoder when a cam step runs."""
+    triggered = any(s.kind == "trigger" for s in plan.steps)
+    cams = any(s.kind == "cam" for s in plan.steps)
+    return placed_drives(plan.stroke, opts, datasets, TRIGGER_MODE_DIRECT if triggered else None,
+                         ENCODER_SOURCE_X10 if cams else None)
+
+
 def run_job(pvl, opts: RunOptions, build_result, plan: Plan, *, dataset=None, progress=None,
             motion_progress=None, timeout_s: float = 60.0, inhibit_100us: int = 0, toggle_inputs: bool = True,
             **kw) -> RunResult:
@@ -275,10 +284,6 @@ def run_job(pvl, opts: RunOptions, build_result, plan: Plan, *, dataset=None, pr
     if plan.refusals:
         raise ValueError("the motion plan does not fit the axis: " + "; ".join(plan.refusals))
     if plan.stroke is not None and kw.get("drive_factory") is None:
-        triggered = any(s.kind == "trigger" for s in plan.steps)
-        cams = any(s.kind == "cam" for s in plan.steps)
-        kw["drive_factory"] = placed_drives(plan.stroke, opts, kw.get("datasets"),
-                                            TRIGGER_MODE_DIRECT if triggered else None,
-                                            ENCODER_SOURCE_X10 if cams else None)
+        kw["drive_factory"] = job_drives(plan, opts, kw.get("datasets"))
     return run(pvl, opts, build_result, dataset=dataset, progress=progress,
                after=motion_phase(plan, timeout_s, motion_progress, inhibit_100us, toggle_inputs), **kw)
