@@ -110,6 +110,16 @@ IN_ANY_STATE = frozenset(STATE_NAMES)
 
 E1100, B1100 = "E1100", "B1100"
 
+# seed 004 4.2 (the overview table): the B1100 column has an X for every command of master IDs 00h..03h in
+# the seed, except 004xh (X6 outputs) (spec/linmot-b1100.md 3.1); later groups cannot be read from the seed
+_SEED_B1100 = frozenset({0x000, 0x001, 0x002, 0x003, 0x008, 0x009, *range(0x010, 0x020), 0x020, 0x021, 0x022,
+                         0x023, 0x024, 0x027, 0x028, *range(0x02A, 0x030), 0x030, 0x031, 0x032, 0x03F})
+
+
+def seed_drives(cid: int) -> frozenset[str]:
+    """The drive types that have a command by seed 004's overview: the B1100 only where its column says so."""
+    return frozenset({E1100, B1100}) if cid in _SEED_B1100 else frozenset({E1100})
+
 
 @dataclass(frozen=True)
 class CommandDef:

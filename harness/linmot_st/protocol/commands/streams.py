@@ -8,7 +8,7 @@ of the measured one for the derivatives ([MC] 4.3.40, 4.3.41, 4.3.43)."""
 
 from __future__ import annotations
 
-from .row import CommandDef, Field, Kind, register
+from .row import CommandDef, Field, Kind, register, seed_drives
 
 P_STREAM = 0x030
 PV_STREAM = 0x031
@@ -34,7 +34,8 @@ STREAM_CONFIGURED_PERIOD = frozenset({P_STREAM_CONFIGURED_PERIOD, PV_STREAM_CONF
 
 
 def _stream(cid, name, fields, mc):
-    return CommandDef(cid, name, fields, Kind.STREAM, needs_homing=True, source=f"[MC] 4.3.{mc}")
+    return CommandDef(cid, name, fields, Kind.STREAM, needs_homing=True, drives=seed_drives(cid),
+                      source=f"[MC] 4.3.{mc}")
 
 
 register(
@@ -47,5 +48,6 @@ register(
     _stream(PVA_STREAM, "PVA Stream With Slave Generated Time Stamp", (_P, _V, _A), 42),
     _stream(PVA_STREAM_CONFIGURED_PERIOD,
             "PVA Stream With Slave Generated Time Stamp and Configured Period Time", (_P, _V, _A), 43),
-    CommandDef(STOP_STREAMING, "Stop Streaming", (), Kind.STREAM_STOP, source="[MC] 4.3.44"),
+    CommandDef(STOP_STREAMING, "Stop Streaming", (), Kind.STREAM_STOP, drives=seed_drives(STOP_STREAMING),
+               source="[MC] 4.3.44"),
 )

@@ -7,7 +7,8 @@ An "On Rising/Falling Trigger Event" command does not move at once: it is armed 
 word bit 8) and its plain counterpart runs on every such edge until 008xh clears the handler. `TRIGGERED` says
 per ID which edge and what runs: a VAI of one family (the field values read as that family's units), a time
 curve (the row of the plain command, whose fields it shares) or a command-table entry.
-Layouts: [MC] 4.3 (section per row); the E1100 has them by the seed's TOC (B1100: not listed).
+Layouts: [MC] 4.3 (section per row); the E1100 has them by the seed's TOC, the B1100 those of master IDs 01h/02h
+(seed 004 4.2's overview, row.seed_drives).
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass
 
-from .row import CommandDef, Field, Kind, Start, Target, register
+from .row import CommandDef, Field, Kind, Start, Target, register, seed_drives
 from .curves import TIME_CURVE_OFFSET_TIME_AMP, TIME_CURVE_TO_POS, TIME_CURVE_TO_POS_TIME
 from .command_table import START_COMMAND_TABLE
 
@@ -57,7 +58,8 @@ _FIELDS = {
 def _vai(cid: int, name: str, units: Units, rising: bool, increment: bool, mc: int) -> CommandDef:
     TRIGGERED[cid] = Trigger(rising, units=units)
     return CommandDef(cid, name, _FIELDS[units], Kind.ON_TRIGGER, needs_homing=True, start=Start.DEMAND,
-                      target=Target.FROM_LAST_TARGET if increment else Target.ABSOLUTE, source=f"[MC] 4.3.{mc}")
+                      target=Target.FROM_LAST_TARGET if increment else Target.ABSOLUTE, drives=seed_drives(cid),
+                      source=f"[MC] 4.3.{mc}")
 
 
 def _family(first: int, prefix: str, units: Units, mc: int) -> list[CommandDef]:
@@ -116,7 +118,7 @@ register(
     CommandDef(VAI_GO_TO_ANALOG_POS, "VAI Go To Analog Pos",
                (Field("vmax", "UDINT", "1E-6 m/s"), Field("acc", "UDINT", "1E-5 m/s^2"),
                 Field("dec", "UDINT", "1E-5 m/s^2")), Kind.VAI_ANALOG, needs_homing=True, target=Target.ABSOLUTE,
-               source="[MC] 4.3.18"),
+               drives=seed_drives(VAI_GO_TO_ANALOG_POS), source="[MC] 4.3.18"),
     CommandDef(VAI_INCREMENT_CAPTURED_POS, "VAI Increment Captured Pos", _V32, Kind.VAI_CAPTURED,
                needs_homing=True, target=Target.ABSOLUTE, source="[MC] 4.3.122 (capture variable 1E62h: 4.3.123's text)"),
     # [MC] 4.3.128/129: "starts the VAI motion command defined with the parameters in Trig Rise (Fall) Config"
