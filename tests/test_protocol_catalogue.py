@@ -143,3 +143,13 @@ def test_the_regenerated_st_encoder_encodes_a_new_row(monkeypatch, tmp_path, bac
         plc.step(1)
         assert plc["ENC.NBYTES"] == len(expected) - 2, hex(cid)
         assert bytes(plc["ENC.IMG"])[:len(expected)] == expected, hex(cid)
+
+
+def test_the_b1100_has_exactly_the_commands_the_seeds_overview_marks():
+    """Seed 004 4.2's B1100 column (spec/linmot-b1100.md 3.1): X for every command of master IDs 00h..03h in the
+    seed but 004xh; nothing later can be read from the seed, so no later row lists the B1100."""
+    from linmot_st.protocol.commands.row import seed_drives
+    for cid, row in C.COMMANDS.items():
+        assert row.drives == seed_drives(cid), f"{cid:03X}h: {sorted(row.drives)}"
+    b1100 = {cid for cid, row in C.COMMANDS.items() if C.B1100 in row.drives}
+    assert {0x003, 0x008, 0x01A, 0x02E, 0x030, 0x03F} <= b1100 and not b1100 & {0x004, 0x033, 0x040, 0x090, 0x100}
