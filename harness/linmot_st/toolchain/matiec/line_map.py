@@ -11,8 +11,9 @@ print_line_directive in the statement list). Two things then count on the wrong 
 `exact_lines` repeats the directive before each C line that starts a statement (the line before it ends
 a statement or a block: `;`, `{`, `}`; never inside a macro call, an expression or a macro's definition),
 puts the ELSIF's own line before each `} else if (`: the first ELSIF of that file after the line in
-effect (the arm before it ends there, so no other ELSIF lies between), and returns to the C file's own
-numbering after each function.
+effect (the arm before it ends there, so no other ELSIF lies between), gives the lines of no statement (a
+block's closing brace, CASE's `else if` tests and `else {`) the C file's own numbering, as the builtin backend
+counts them on no ST line, and returns to the C file's own numbering after each function.
 """
 
 from __future__ import annotations
@@ -22,17 +23,23 @@ from pathlib import Path
 
 _DIRECTIVE = re.compile(r'^\s*#line\s+(\d+)\s+"((?:[^"\\]|\\.)*)"\s*$')
 _ELSE_IF = re.compile(r"^\s*\}\s*else\s+if\s*\(")
+# a line of no statement: a block's end (`}`, `};`, a function's `} // F_body__()`) or CASE's next test
+# (`else if ((__case_expression == 2) ||` on a line of its own, then its `else {`): iec2c numbers them with
+# the previous statement's line, where they would count every pass; the builtin backend counts them nowhere
+_NO_STATEMENT = re.compile(r"^\s*(\}\s*;?\s*(//.*)?|else\b.*)$")
 
 
 def exact_lines(text: str, elsif_lines, c_name: str) -> str:
     """The C text with directives repeated and ELSIF lines set. `elsif_lines(file) -> sorted list[int]`:
     the lines of the ELSIF keywords' tests in that ST file (as the #line names it); `c_name`: the C file's
     name, for the C after a function."""
+    lines = text.split("\n")
+    tail = _body_tails(lines)
     out: list[str] = []
     current: tuple[int, str] | None = None      # (ST line, file as written) in effect
     boundary = True                             # the previous C line ended a statement or a block
     continued = False                           # the previous line ended in a backslash (a macro's body)
-    for line in text.split("\n"):
+    for i, line in enumerate(lines):
         if continued:
             continued = line.rstrip().endswith("\\")
             out.append(line)
@@ -51,6 +58,8 @@ def exact_lines(text: str, elsif_lines, c_name: str) -> str:
                 if later:
                     current = (later[0], current[1])
                 out.append(f'#line {current[0]} "{current[1]}"')
+            elif _NO_STATEMENT.match(line) or i in tail:
+                out.append(f'#line {len(out) + 2} "{c_name}"')          # counted on no ST line
             elif boundary:
                 out.append(f'#line {current[0]} "{current[1]}"')
         out.append(line)
@@ -62,6 +71,22 @@ def exact_lines(text: str, elsif_lines, c_name: str) -> str:
             out.append(f'#line {len(out) + 2} "{c_name}"')
             current = None
     return "\n".join(out)
+
+
+def _body_tails(lines: list[str]) -> set[int]:
+    """The indices of each body's tail, which iec2c numbers with the last statement's line: the `goto __end;`
+    right before the `__end:` label, the label and the `return;` after it (an ST RETURN's own `goto __end;`
+    comes earlier, with its own directive)."""
+    tails: set[int] = set()
+    code = [i for i, l in enumerate(lines) if l.strip() and not _DIRECTIVE.match(l)]
+    for k, i in enumerate(code):
+        if lines[i].strip() == "__end:":
+            tails.add(i)
+            if k > 0 and lines[code[k - 1]].strip() == "goto __end;":
+                tails.add(code[k - 1])
+            if k + 1 < len(code) and lines[code[k + 1]].strip() == "return;":
+                tails.add(code[k + 1])
+    return tails
 
 
 def decisions(stmts: list) -> list:
