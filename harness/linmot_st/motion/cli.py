@@ -72,8 +72,7 @@ def run_command(args: argparse.Namespace) -> int:
         return 1
     # per-node PVL files (--pvl NODE=FILE, e.g. a B1100 beside E1100s): the steps every axis can run
     others = [s.pvl for s in prep.datasets.sources if s.pvl is not prep.pvl] if prep.datasets else []
-    # the PLC-streamed profile needs a deterministic scan: the simulated bus's virtual time, not real time
-    plan = make_plan(prep.pvl, args.position, others=others, stream=prep.opts.bus == "sim")
+    plan = make_plan(prep.pvl, args.position, others=others)
     if plan.refusals:
         # before any motion (and before commissioning): the file's own settings exclude a step
         print(f"motion job: REFUSED before motion: {plan.stroke.describe()}")

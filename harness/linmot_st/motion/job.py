@@ -171,7 +171,7 @@ def _write_steps(plc, plan: Plan, inhibit_100us: int = 0) -> None:
     # every step carries the TxPDO2 inhibit time of the bus budget (linmot_st.motion.budget); SETUP uses it
     values = [{**s.plc_value(), "INHIBIT100US": inhibit_100us} for s in plan.steps]
     blank = {"KIND": "PLC_STEP_NONE", "POSITION": 0.0, "VELOCITY": 0.0, "ACCELERATION": 0.0, "CURVEID": 0,
-             "ENTRY": 0, "INHIBIT100US": 0, "HOLD": 0, "AMPLITUDE": 0.0, "FREQUENCY": 0.0}
+             "ENTRY": 0, "INHIBIT100US": 0, "HOLD": 0}
     plc[f"{INSTANCE}.STEPS"] = values + [blank] * (MAX_STEPS - len(values))
     plc[f"{INSTANCE}.NSTEPS"] = len(values)
 
