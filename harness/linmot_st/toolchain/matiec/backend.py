@@ -8,7 +8,8 @@ from pathlib import Path
 from .. import cc
 from ..backend import Generated, Rejected
 from ..sources import Sources
-from . import iec2c, layout, line_map
+from . import layout, line_map
+from . import tool as iec2c_tool
 
 PACKAGE_DIR = Path(__file__).parent
 BUILTIN_DIR = PACKAGE_DIR.parent / "builtin"
@@ -20,35 +21,35 @@ class MatiecBackend:
     missing_note = "iec2c not found"
 
     def missing(self) -> str | None:
-        if iec2c.find() is None:
+        if iec2c_tool.find() is None:
             return "backend matiec: iec2c not found (set IEC2C or MATIEC_HOME, or put iec2c on PATH)"
         return None
 
     def available(self) -> bool:
         return self.missing() is None
 
-    def _tool(self) -> iec2c.Matiec:
-        tool = iec2c.find()
+    def _tool(self) -> iec2c_tool.Matiec:
+        tool = iec2c_tool.find()
         if tool is None:
             raise Rejected([f"error: {self.missing()}"])
         return tool
 
     def version(self) -> str:
-        return iec2c.version(self._tool())
+        return iec2c_tool.version(self._tool())
 
     def generator_files(self) -> list[Path]:
         # st_decls reads declarations with the builtin parser: its files shape the MatIEC manifest too
-        own = [PACKAGE_DIR / name for name in ("backend.py", "iec2c.py", "layout.py", "st_decls.py", "line_map.py")]
+        own = [PACKAGE_DIR / name for name in ("backend.py", "tool.py", "layout.py", "st_decls.py", "line_map.py")]
         return [*own, *sorted(BUILTIN_DIR.glob("*.py")), BUILTIN_DIR / "st.lark"]
 
     def flags(self) -> list[str]:
-        return list(iec2c.flags(self._tool().iec2c)) + unit_flags()
+        return list(iec2c_tool.flags(self._tool().iec2c)) + unit_flags()
 
     def generate(self, src: Sources, c_dir: Path, version: str, coverage: bool = False) -> Generated:
         tool = self._tool()
         try:
             manifest, units, plain_units = layout.generate(tool, src, c_dir, version)
-        except iec2c.MatiecError as exc:
+        except iec2c_tool.MatiecError as exc:
             raise Rejected(exc.diagnostics) from None
         if coverage:
             # iec2c's C has `#line` already (flags(): `-O l`); made exact per C line and ELSIF

@@ -20,7 +20,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from .. import build, cache as _cache
-from .iec2c import find, version
+from .tool import find, version
 
 GUARD = 20     # more iterations than any probe loop runs under IEC semantics: a loop that goes on spins
 

@@ -19,7 +19,7 @@ from pathlib import Path
 from ..builtin.errors import BuiltinCompileError
 from ..sources import Sources
 from . import st_decls
-from .iec2c import Matiec, MatiecError, run_iec2c
+from .tool import Matiec, MatiecError, run_iec2c
 
 NAME = "matiec"
 ELEMENTARY = {"BOOL", "SINT", "INT", "DINT", "LINT", "USINT", "UINT", "UDINT", "ULINT", "BYTE", "WORD",
