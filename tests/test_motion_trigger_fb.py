@@ -1,0 +1,176 @@
+"""FB_LmTriggeredMove (st_lib/motion/trigger.st) against the emulated E1100's event handler (emulator/linmot/
+motion/events.py) and its trigger input X4.6 in direct mode (170Ch = 1, [MC] 7.2.2): armed, Active while it
+waits, the move runs on the edge the test raises and the FB is Done in target; disarmed by FB_LmAbortTrigger
+before its edge nothing moves; the falling-edge, increment, curve and command-table variants; the command each
+input set chooses; refusals before any frame. Runs on the backend the suite runs on (MatIEC where installed,
+STLIB_BACKEND forces one)."""
+
+from __future__ import annotations
+
+import struct
+import sys
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
+from motionbench import MM, MotionBench  # noqa: E402
+
+from linmot_st.emulator import Curve, build_entry  # noqa: E402
+from linmot_st.protocol import commands as C  # noqa: E402
+from linmot_st.protocol.errors import BY_NAME  # noqa: E402
+
+E = {name: e.value for name, e in BY_NAME.items()}
+MOVE = dict(VELOCITY=1000.0, ACCELERATION=10000.0, DECELERATION=10000.0)     # 16-bit exact: 09Axh
+TRIGGER_DIRECT = {0x170C: 1}
+
+
+def bench(**kw) -> MotionBench:
+    return MotionBench(nodes=1, defaults=TRIGGER_DIRECT, **kw).ready()
+
+
+def heads(b: MotionBench, t0: int) -> list[int]:
+    return [struct.unpack_from("<H", f)[0] >> 4 for f in b.payloads(0x301, t0)]
+
+
+def arm(b: MotionBench, **inputs):
+    trig = b.fb("TRIG")
+    trig.start(**{"ARM": "LM_TRIG_GO_TO_POS", "POSITION": 40.0, **MOVE, **inputs})
+    b.sim.run_until(lambda: trig["ACTIVE"] or trig["ERROR"], max_scans=200)
+    assert trig["ACTIVE"] and trig["BUSY"] and not trig["TRIGGERED"], trig["ERRORID"]
+    return trig
+
+
+def test_armed_move_waits_active_then_runs_on_the_rising_edge():
+    b = bench()
+    start = b.drive.mc.axis.position
+    t0 = b.plc.time_ns
+    trig = arm(b)
+    assert b["RSTAT.STATUSWORD"] & 0x0100                               # the drive's event handler is armed
+    b.step(100)                                                          # no edge: nothing moves
+    assert trig["ACTIVE"] and not trig["DONE"] and b.drive.mc.axis.position == start
+    t_edge = b.bus.now
+    b.drive.io.set_input("X4.6", 1, t_edge)
+    b.sim.run_until(lambda: trig["TRIGGERED"] or trig["ERROR"], max_scans=50)
+    assert trig["TRIGGERED"] and trig["ACTIVE"]
+    b.sim.run_until(lambda: trig["DONE"] or trig["ERROR"] or trig["COMMANDABORTED"], max_scans=2000)
+    assert trig["DONE"] and not trig["ACTIVE"] and not trig["BUSY"]
+    assert abs(b.drive.mc.axis.position - 40 * MM) <= 1000
+    moving = [s for s in b.drive.mc.trajectory.between(t0) if s.demand != start]
+    assert moving and moving[0].t_ns >= t_edge                          # the demand left only after the edge
+    assert heads(b, t0) == [0x09A]
+    b["TRIG.EXECUTE"] = False
+    b.step(1)
+    assert not trig["DONE"]
+
+
+def test_disarmed_before_its_edge_moves_nothing():
+    b = bench()
+    start = b.drive.mc.axis.position
+    trig = arm(b)
+    t0 = b.plc.time_ns
+    r = b.fb("ABORTTRIG").run()
+    assert r.done, r
+    b.step(2)
+    assert trig["COMMANDABORTED"] and not trig["BUSY"] and not trig["ACTIVE"]
+    assert heads(b, t0) == [0x008] and not b["RSTAT.STATUSWORD"] & 0x0100
+    b.drive.io.set_input("X4.6", 1)
+    b.step(300)
+    b.drive.io.set_input("X4.6", 0)
+    b.step(50)
+    assert b.drive.mc.axis.position == start and b.drive.mc.events.fired == []
+    assert all(s.demand == start for s in b.drive.mc.trajectory.between(t0))
+
+
+def test_falling_edge_increment_from_the_last_target():
+    b = bench()
+    assert b.fb("MVA").run(POSITION=50.0, **MOVE).done
+    b.drive.io.set_input("X4.6", 1)
+    b.step(5)
+    t0 = b.plc.time_ns
+    trig = arm(b, ARM="LM_TRIG_INCREMENT", FALLING=True, POSITION=-12.3456, VELOCITY=333.3,
+               ACCELERATION=7777.0, DECELERATION=6666.0)
+    assert heads(b, t0) == [0x002, 0x002, 0x002, 0x02D]                  # 32-bit values: the predefined VAI
+    b.drive.io.set_input("X4.6", 0)                                      # the falling edge
+    b.sim.run_until(lambda: trig["DONE"] or trig["ERROR"], max_scans=2000)
+    assert trig["DONE"], trig["ERRORID"]
+    assert abs(b.drive.mc.dem_p - (50 * MM - 123456)) < 1
+    assert b.drive.mc.params[0x14BE].ram == 333_300
+
+
+def test_predefined_limits_send_only_the_position():
+    b = bench()
+    t0 = b.plc.time_ns
+    trig = arm(b, POSITION=25.0, PREDEFINEDLIMITS=True, VELOCITY=0.0)
+    frames = b.payloads(0x301, t0)
+    assert heads(b, t0) == [0x02A] and struct.unpack_from("<i", frames[0], 2)[0] == 25 * MM
+    b.drive.io.set_input("X4.6", 1)
+    b.sim.run_until(lambda: trig["DONE"] or trig["ERROR"], max_scans=2000)
+    assert trig["DONE"] and abs(b.drive.mc.axis.position - 25 * MM) <= 1000
+
+
+def test_a_second_edge_runs_the_armed_command_again_until_disarmed():
+    """The drive keeps the command armed after it ran ([MC] 4.3.6): an increment runs on every edge."""
+    b = bench()
+    start = b.drive.mc.dem_p
+    trig = arm(b, ARM="LM_TRIG_INCREMENT", POSITION=5.0)
+    for k in (1, 2):
+        b.drive.io.set_input("X4.6", 1)
+        b.step(200)
+        b.drive.io.set_input("X4.6", 0)
+        b.step(10)
+        assert abs(b.drive.mc.dem_p - (start + k * 5 * MM)) < 1
+    assert trig["DONE"]
+    assert b.fb("ABORTTRIG").run().done
+    b.drive.io.set_input("X4.6", 1)
+    b.step(200)
+    assert abs(b.drive.mc.dem_p - (start + 10 * MM)) < 1
+
+
+def curves_and_table(b: MotionBench) -> None:
+    b.drive.curves.ram[1] = Curve.build(1, [k * k * 1000 for k in range(11)], x_length=5000)  # 0 .. 10 mm, 50 ms
+    params = C.encode(C.VAI16_INCREMENT_DEM_POS, 0, target=100, vmax=500, acc=100, dec=100)[2:]
+    b.drive.ct.ram[5] = build_entry(C.VAI16_INCREMENT_DEM_POS << 4, params)                    # +10 mm
+
+
+@pytest.mark.parametrize("inputs, cid, moved_mm", [
+    (dict(ARM="LM_TRIG_CURVE_TO_POS", CURVEID=1), 0x04A, 15.0),        # the curve scaled to end 15 mm on
+    (dict(ARM="LM_TRIG_COMMAND_TABLE", ENTRY=5), 0x201, 10.0),
+])
+def test_curve_and_command_table_start_on_the_edge(inputs, cid, moved_mm):
+    b = bench()
+    curves_and_table(b)
+    start = b.drive.mc.dem_p
+    t0 = b.plc.time_ns
+    trig = arm(b, **{"POSITION": start / MM + moved_mm, **inputs})
+    assert heads(b, t0) == [cid]
+    b.step(50)
+    assert b.drive.mc.dem_p == start
+    b.drive.io.set_input("X4.6", 1)
+    b.sim.run_until(lambda: trig["DONE"] or trig["ERROR"], max_scans=3000)
+    assert trig["DONE"], (trig["ERRORID"], trig["DRIVEERROR"])
+    assert abs(b.drive.mc.dem_p - start - moved_mm * MM) < 2
+
+
+@pytest.mark.parametrize("inputs, error", [
+    (dict(VELOCITY=0.0), "InvalidVelocity"),
+    (dict(DECELERATION=-1.0), "InvalidDeceleration"),
+    (dict(POSITION=1.0e6), "PositionRange"),
+    (dict(ARM="LM_TRIG_CURVE_TO_POS", CURVEID=0), "InvalidCurveId"),
+    (dict(ARM="LM_TRIG_COMMAND_TABLE", ENTRY=256), "InvalidCtEntry"),
+    (dict(COMMAND="LM_VAI_DEC_ACC"), "CommandNotMapped"),               # 12 bytes: the default RxPDOs carry 8
+])
+def test_invalid_inputs_refused_before_any_frame(inputs, error):
+    b = bench()
+    t0 = b.plc.time_ns
+    r = b.fb("TRIG").run(**{"ARM": "LM_TRIG_GO_TO_POS", "POSITION": 40.0, **MOVE, **inputs}, max_scans=5)
+    assert r.error and r.error_id == E[error]
+    assert b.payloads(0x301, t0) == [] and b.payloads(0x401, t0) == []
+
+
+def test_not_homed_refused_before_any_frame():
+    b = MotionBench(nodes=1, defaults=TRIGGER_DIRECT)
+    b.power()
+    t0 = b.plc.time_ns
+    r = b.fb("TRIG").run(ARM="LM_TRIG_GO_TO_POS", POSITION=40.0, **MOVE, max_scans=5)
+    assert r.error and r.error_id == E["AxisNotHomed"] and b.payloads(0x301, t0) == []
