@@ -1,9 +1,13 @@
-"""PLCopen conformance of every Execute-type motion FB (spec/conventions.md, spec/linmot-motion.md 5), with the
-checks the configuration FBs get (tests/st_lib/plcopen_checks.py), extended with Active and CommandAborted:
-edge latching, exclusive outputs, Done/Error held while Execute stays TRUE, one-scan pulses after Execute fell,
-re-trigger while Busy ignored, inputs latched at the rising edge, invalid inputs before any frame, a newer
-command aborting the running one. A run's frames are its RxPDOs (the motion command, or the control word for
-homing and reset)."""
+"""The one PLCopen suite of the motion FBs (spec/conventions.md, spec/linmot-motion.md 5): every Execute-type
+motion FB of st_lib gets the checks the configuration FBs get (tests/st_lib/plcopen_checks.py), extended with
+Active and CommandAborted: edge latching, exclusive outputs, Done/Error held while Execute stays TRUE, one-scan
+pulses after Execute fell, re-trigger while Busy ignored, inputs latched at the rising edge, invalid inputs before
+any frame, a newer command aborting the running one. A run's frames are its RxPDOs (the motion command, or the
+control word for homing and reset), or its SDO requests (MC_WriteParameter, MC_TouchProbe).
+Three groups: the FBs that end Done (SPECS: moves, stops, homing, curves, the command table, the raw command,
+cams selected and decoupled, I/O, the triggered move and the touch probe, which finish on an edge of X4.6 / X4.5
+the drive's inputs get every few ms), the FBs that run until something ends them (CONTINUOUS: MC_MoveVelocity
+with InVelocity, MC_CamIn with InSync), and MC_Jog, whose JogForward / JogBackward are levels (its own rules)."""
 
 from __future__ import annotations
 
@@ -16,12 +20,13 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
 from motionbench import MotionBench  # noqa: E402
-from plcopen_checks import (assert_exclusive, check_done_held, check_one_scan_pulse,  # noqa: E402
+from plcopen_checks import (IDLE, assert_exclusive, check_done_held, check_one_scan_pulse,  # noqa: E402
                             check_reset_on_falling_edge, check_rising_edge_after_the_pulse, check_toggled_execute,
                             outputs, run_recording)
 
 from linmot_st.emulator import Curve, build_entry  # noqa: E402
 from linmot_st.protocol import commands as C  # noqa: E402
+from linmot_st.protocol import upids as U  # noqa: E402
 
 MS = 1_000_000
 MOVE = dict(VELOCITY=1000.0, ACCELERATION=10000.0, DECELERATION=10000.0)
@@ -35,6 +40,28 @@ def curves_and_table(b: MotionBench) -> None:
     b.drive.curves.ram[7] = Curve.build(7, [0, 10_000, 0], x_length=8000, object_type=0x0103, x_dim=0x001B)   # a cam
 
 
+TRIGGER_DIRECT = {0x170C: 1}                   # the trigger input X4.6's edges as they come ([MC] 7.2.2)
+CAM_INPUTS = {U.P_MASTER_ENCODER_SOURCE: 1, U.P_MASTER_ENCODER_COUNTS_PER_REV: 8000}
+
+
+def trigger_pulses(b: MotionBench) -> None:
+    """X4.6 pulses every 60 ms for a minute: an armed triggered move runs on the next one (and, as the drive keeps
+    it armed, on every later one: an increment of 2 mm takes 28 ms at 1 m/s, 10 m/s^2)."""
+    b.drive.io.pulse_train("X4.6", b.bus.now + 5 * MS, 60 * MS, 5 * MS, 1000)
+
+
+def moving_with_capture_pulses(b: MotionBench) -> None:
+    """The axis crawls at 20 mm/s (MVA2) while X4.5 pulses every 20 ms: each capture lies 0.4 mm further on."""
+    b.fb("MVA2").start(POSITION=250.0, VELOCITY=20.0, ACCELERATION=1000.0, DECELERATION=1000.0)
+    b.step(20)
+    b.drive.io.pulse_train("X4.5", b.bus.now + 5 * MS, 20 * MS, 5 * MS, 3000)
+
+
+def cam_table_1(b: MotionBench) -> None:
+    r = b.fb("CAMSEL").run(CAMTABLE=7, CAM=1, MASTERSTART=0, PERIODIC=True)
+    assert r.done, r
+
+
 @dataclass
 class Spec:
     name: str
@@ -42,9 +69,12 @@ class Spec:
     alt: dict | None = None                    # set while Busy: must change nothing
     bad: dict | None = None                    # invalid: Error before any frame
     frames: tuple = (0x301,)                   # the frames a run sends
-    setup: Callable[[MotionBench], None] | None = None
+    setup: Callable[[MotionBench], None] | None = None       # before power and homing
+    ready: Callable[[MotionBench], None] | None = None       # after them
+    defaults: dict | None = None               # the drive's parameters at its start
     abortable: bool = True                     # a newer command aborts it (CommandAborted)
     newer: tuple = ("MVA2", dict(POSITION=1.0, **MOVE))   # the newer command
+    same_frames: bool = True                   # a run sends the same frames whatever the bus timing
 
 
 SPECS = [
@@ -68,15 +98,24 @@ SPECS = [
     Spec("ABORTTRIG", {}),
     Spec("WPAR", dict(UPID=0x14B0, VALUE=20000), dict(VALUE=30000), dict(UPID=0x5000), frames=(0x601,),
          abortable=False),
+    # armed on X4.6 (an increment: each run moves, also where the last one ended), Done in target
+    Spec("TRIG", dict(ARM="LM_TRIG_INCREMENT", POSITION=2.0, **MOVE), dict(POSITION=9.0), dict(VELOCITY=0.0),
+         defaults=TRIGGER_DIRECT, ready=trigger_pulses),
+    # the capture on X4.5 read by SDO until it changes; MC_AbortTrigger ends it; its reads repeat until the capture
+    Spec("PROBE", {}, frames=(0x601,), ready=moving_with_capture_pulses, newer=("ABORTTRIG", {}),
+         same_frames=False),
 ]
 IDS = [s.name for s in SPECS]
 
 
-def bench(spec: Spec) -> MotionBench:
-    b = MotionBench(nodes=1)
+def bench(spec) -> MotionBench:
+    b = MotionBench(nodes=1, defaults=spec.defaults)
     if spec.setup:
         spec.setup(b)
-    return b.ready()
+    b.ready()
+    if spec.ready:
+        spec.ready(b)
+    return b
 
 
 def rx_frames(b: MotionBench, t0: int, ids: tuple = RX) -> list[tuple[int, bytes]]:
@@ -128,8 +167,10 @@ def test_retrigger_while_busy_is_ignored_and_inputs_are_latched(spec):
     t0 = b.plc.time_ns
     states = run_recording(b, fb, execute_scans=None, retrigger_at=3, alt_at=spec.alt)
     assert any(s[0] for s in states) and not any(s[2] for s in states)
+    assert sum(1 for a, z in zip(states, states[1:]) if z[1] and not a[1]) == 0     # Busy from the first scan on
     b.step(20)
-    assert rx_frames(b, t0, spec.frames) == reference            # one run, with the inputs of the first edge
+    if spec.same_frames:
+        assert rx_frames(b, t0, spec.frames) == reference        # one run, with the inputs of the first edge
 
 
 @pytest.mark.parametrize("spec", [s for s in SPECS if s.bad], ids=[s.name for s in SPECS if s.bad])
@@ -189,3 +230,228 @@ def test_execute_toggled_every_scan_gives_one_run_per_edge_after_completion(spec
     fb = b.fb(spec.name)
     fb.set(**spec.inputs)
     check_toggled_execute(b, fb, first_request_scans=2, request_starts=motion_starts(spec.frames))
+
+
+# ---------------------------------------------------------------- FBs that run until something ends them
+@dataclass
+class Continuous:
+    name: str
+    state: str                                 # the output that says it reached its motion
+    inputs: dict
+    alt: dict                                  # set while Busy: must change nothing
+    bad: dict                                  # invalid: Error before any frame
+    newer: tuple                               # the FB that ends it (CommandAborted)
+    setup: Callable[[MotionBench], None] | None = None
+    ready: Callable[[MotionBench], None] | None = None
+    defaults: dict | None = None
+
+
+CONTINUOUS = [
+    Continuous("MVV", "INVELOCITY", dict(VELOCITY=50.0, ACCELERATION=1000.0, DECELERATION=1000.0,
+                                         DIRECTION="LM_DIR_POSITIVE"),
+               dict(VELOCITY=90.0), dict(ACCELERATION=0.0), ("HALT", dict(DECELERATION=5000.0))),
+    Continuous("CAMIN", "INSYNC", dict(CAMTABLEID=1), dict(CAMTABLEID=2), dict(CAMTABLEID=3), ("CAMOUT", {}),
+               setup=curves_and_table, ready=cam_table_1, defaults=CAM_INPUTS),
+]
+CIDS = [c.name for c in CONTINUOUS]
+
+
+def state_of(fb, c: Continuous) -> tuple:
+    """(reached, Busy, Error, CommandAborted, ErrorID): Done's place taken by InVelocity / InSync."""
+    return fb[c.state], fb["BUSY"], fb["ERROR"], fb["COMMANDABORTED"], fb["ERRORID"]
+
+
+def assert_continuous_exclusive(s: tuple) -> None:
+    reached, busy, error, aborted, error_id = s
+    assert busy + error + aborted <= 1, s
+    assert not reached or busy, s                               # InVelocity / InSync only while Busy
+    assert (error_id != 0) == error, s
+
+
+def reach(b: MotionBench, fb, c: Continuous, execute_scans: int | None = None) -> list[tuple]:
+    states = []
+    for k in range(1, 1000):
+        fb["EXECUTE"] = execute_scans is None or k <= execute_scans
+        b.step(1)
+        s = state_of(fb, c)
+        assert_continuous_exclusive(s)
+        states.append(s)
+        if s[0] or s[2]:
+            return states
+    raise AssertionError(f"{c.name} never reached its motion")
+
+
+def first_commands(b: MotionBench, t0: int) -> list[bytes]:
+    return rx_frames(b, t0, (0x301, 0x401))
+
+
+@pytest.mark.parametrize("c", CONTINUOUS, ids=CIDS)
+def test_continuous_busy_until_a_newer_command_aborts_it_held_then_reset(c):
+    """Busy from the Execute scan, never Done: it keeps running (Busy, Active, InVelocity / InSync) also after
+    Execute fell; the FB that ends it makes it CommandAborted, held while Execute stays TRUE."""
+    b = bench(c)
+    fb = b.fb(c.name)
+    fb.set(**c.inputs)
+    states = reach(b, fb, c)
+    assert all(s[1] for s in states) and states[-1][0], states[-1]
+    b.step(50)
+    assert fb["BUSY"] and fb["ACTIVE"] and fb[c.state]
+    newer = b.fb(c.newer[0])
+    newer.start(**c.newer[1])
+    b.sim.run_until(lambda: fb["COMMANDABORTED"] or fb["ERROR"], max_scans=500)
+    s = state_of(fb, c)
+    assert s[3] and not s[1] and not s[0] and not fb["ACTIVE"], s
+    b.step(3)
+    assert fb["COMMANDABORTED"]                                  # held while Execute stays TRUE
+    fb["EXECUTE"] = False
+    b.step(1)
+    assert state_of(fb, c) == (False, False, False, False, 0)
+    b.sim.run_until(lambda: newer["DONE"], max_scans=1000)
+
+
+@pytest.mark.parametrize("c", CONTINUOUS, ids=CIDS)
+def test_continuous_goes_on_after_execute_fell_and_its_abort_is_a_one_scan_pulse(c):
+    b = bench(c)
+    fb = b.fb(c.name)
+    fb.set(**c.inputs)
+    reach(b, fb, c, execute_scans=1)
+    b.step(30)
+    assert fb["BUSY"] and fb[c.state]                            # Execute low: it runs on
+    b.fb(c.newer[0]).start(**c.newer[1])
+    seen = []
+    for _ in range(300):
+        b.step(1)
+        s = state_of(fb, c)
+        assert_continuous_exclusive(s)
+        seen.append(s[3])
+        if len(seen) > 3 and seen[-4] and not any(seen[-3:]):
+            break
+    assert seen.count(True) == 1                                 # CommandAborted for one scan
+    assert state_of(fb, c) == (False, False, False, False, 0)
+
+
+@pytest.mark.parametrize("c", CONTINUOUS, ids=CIDS)
+def test_continuous_retrigger_while_busy_is_ignored_and_inputs_are_latched(c):
+    b = bench(c)
+    fb = b.fb(c.name)
+    fb.set(**c.inputs)
+    t0 = b.plc.time_ns
+    reach(b, fb, c)
+    reference = first_commands(b, t0)
+    for k in range(6):
+        fb["EXECUTE"] = k % 2 == 1                               # low, high, ...: edges while Busy
+        if k == 1:
+            fb.set(**c.alt)
+        b.step(1)
+        assert fb["BUSY"] and not fb["ERROR"] and not fb["COMMANDABORTED"]
+    b.step(30)
+    assert first_commands(b, t0) == reference and fb[c.state]   # no second run, the first one's inputs
+
+
+@pytest.mark.parametrize("c", CONTINUOUS, ids=CIDS)
+def test_continuous_invalid_input_error_before_any_frame_held_then_reset(c):
+    b = bench(c)
+    fb = b.fb(c.name)
+    fb.set(**{**c.inputs, **c.bad})
+    t0 = b.plc.time_ns
+    fb["EXECUTE"] = True
+    b.step(1)
+    assert state_of(fb, c)[2] and fb["ERRORID"] != 0
+    b.step(5)
+    assert state_of(fb, c)[2] and first_commands(b, t0) == []
+    fb["EXECUTE"] = False
+    b.step(1)
+    assert state_of(fb, c) == (False, False, False, False, 0)
+
+
+# ---------------------------------------------------------------- MC_Jog: JogForward / JogBackward are levels
+JOG = dict(VELOCITY=100.0, ACCELERATION=1000.0, DECELERATION=1000.0, INCREMENT=0.0)
+
+
+def jog_state(b: MotionBench) -> tuple:
+    return b["JOG.DONE"], b["JOG.BUSY"], b["JOG.ERROR"], b["JOG.COMMANDABORTED"], b["JOG.ERRORID"]
+
+
+def jog_bits(b: MotionBench, t0: int) -> list[int]:
+    return [p[1] & 0x03 for p in b.payloads(0x201, t0)]            # control word bits 8, 9
+
+
+@pytest.mark.parametrize("direction, state, bit", [("JOGFORWARD", 16, 0x01), ("JOGBACKWARD", 17, 0x02)])
+def test_jog_busy_while_held_then_done_for_one_scan_after_release(direction, state, bit):
+    """Busy from the scan the input rises, Active in the jog state while it stays TRUE, never Done while held;
+    the input falls: Done for one scan at standstill (Execute is already low), then every output reset."""
+    b = MotionBench(nodes=1).ready()
+    if direction == "JOGBACKWARD":
+        assert b.fb("MVA").run(POSITION=60.0, **MOVE).done
+    b.fb("JOG").set(**JOG)
+    t0 = b.plc.time_ns
+    b[f"JOG.{direction}"] = True
+    states = []
+    for _ in range(200):
+        b.step(1)
+        s = jog_state(b)
+        assert_exclusive(s)
+        states.append(s)
+    assert all(s[1] and not s[0] for s in states) and b["JOG.ACTIVE"]
+    assert b["RSTAT.STATEVAR"] >> 8 == state and bit in jog_bits(b, t0)
+    b[f"JOG.{direction}"] = False
+    done_scans = 0
+    for _ in range(500):
+        b.step(1)
+        s = jog_state(b)
+        assert_exclusive(s)
+        done_scans += s[0]
+        if done_scans and not s[0]:
+            break
+    assert done_scans == 1 and jog_state(b) == IDLE
+    assert b["RSTAT.STATEVAR"] >> 8 == 8 and b["RSTAT.STANDSTILL"]
+
+
+def test_jog_both_directions_error_held_while_an_input_stays_true_before_any_frame():
+    b = MotionBench(nodes=1).ready()
+    b.fb("JOG").set(**JOG)
+    t0 = b.plc.time_ns
+    b["JOG.JOGFORWARD"] = True
+    b["JOG.JOGBACKWARD"] = True
+    b.step(1)
+    assert jog_state(b)[2] and b["JOG.ERRORID"] != 0
+    b["JOG.JOGBACKWARD"] = False                                   # still one input TRUE: no new edge
+    b.step(20)
+    assert jog_state(b)[2] and b.payloads(0x301, t0) == [] and all(x == 0 for x in jog_bits(b, t0))
+    b["JOG.JOGFORWARD"] = False
+    b.step(1)
+    assert jog_state(b) == IDLE
+
+
+def test_jog_inputs_latched_at_the_rising_edge():
+    b = MotionBench(nodes=1).ready()
+    b.fb("JOG").set(**JOG)
+    b["JOG.JOGFORWARD"] = True
+    b.step(1)
+    b.fb("JOG").set(VELOCITY=20.0, ACCELERATION=9.0)               # while Busy: changes nothing
+    b.step(300)
+    assert b.drive.mc.params[0x14B0].ram == 100_000                 # 100 mm/s, the edge's
+    assert b.drive.mc.params[0x14BF].ram == 100_000                 # 1000 mm/s^2
+    b["JOG.JOGFORWARD"] = False
+    b.sim.run_until(lambda: b["JOG.DONE"], max_scans=500)
+
+
+@pytest.mark.parametrize("newer", [("HALT", dict(DECELERATION=5000.0)), ("STOP", dict(DECELERATION=5000.0))])
+def test_a_newer_command_aborts_a_jog_held_while_the_input_stays_true(newer):
+    b = MotionBench(nodes=1).ready()
+    b.fb("JOG").set(**JOG)
+    b["JOG.JOGFORWARD"] = True
+    b.sim.run_until(lambda: b["JOG.ACTIVE"], max_scans=200)
+    t0 = b.plc.time_ns
+    other = b.fb(newer[0])
+    other.start(**newer[1])
+    b.sim.run_until(lambda: b["JOG.COMMANDABORTED"] or b["JOG.ERROR"], max_scans=200)
+    s = jog_state(b)
+    assert_exclusive(s)
+    assert s[3] and not b["JOG.ACTIVE"], s
+    b.step(5)
+    assert b["JOG.COMMANDABORTED"] and all(x == 0 for x in jog_bits(b, t0)[1:])   # the jog bit dropped
+    b["JOG.JOGFORWARD"] = False
+    b.step(1)
+    assert jog_state(b) == IDLE
+    b.sim.run_until(lambda: other["DONE"], max_scans=2000)
