@@ -18,6 +18,10 @@ from motionbench import MM, MotionBench  # noqa: E402
 
 from linmot_st.emulator import Curve, build_entry  # noqa: E402
 from linmot_st.protocol import commands as C  # noqa: E402
+from linmot_st.protocol.commands import Target  # noqa: E402
+from linmot_st.protocol.commands.command_table import START_COMMAND_TABLE  # noqa: E402
+from linmot_st.protocol.commands.curves import TIME_CURVE_TO_POS  # noqa: E402
+from linmot_st.protocol.commands.triggered import TRIGGERED, Units  # noqa: E402
 from linmot_st.protocol.errors import BY_NAME  # noqa: E402
 
 E = {name: e.value for name, e in BY_NAME.items()}
@@ -174,3 +178,57 @@ def test_not_homed_refused_before_any_frame():
     t0 = b.plc.time_ns
     r = b.fb("TRIG").run(ARM="LM_TRIG_GO_TO_POS", POSITION=40.0, **MOVE, max_scans=5)
     assert r.error and r.error_id == E["AxisNotHomed"] and b.payloads(0x301, t0) == []
+
+
+# ---------------------------------------------------------------- the command each input set sends, by the catalogue
+def bench12() -> MotionBench:
+    """RxPDO3 maps parameter bytes 6..11: VAI Dec=Acc's 12 bytes fit."""
+    return MotionBench(nodes=1, defaults={**TRIGGER_DIRECT, 0x2041: 2}, pdo={"RX3BYTES": 8}).ready()
+
+
+FAMILIES = {                     # the move's values -> the family FB_LmMoveAbsolute's plan picks, its catalogue units
+    "16 bit": (MOVE, Units.V16),
+    "predefined": (dict(VELOCITY=333.3, ACCELERATION=7777.0, DECELERATION=6666.0), Units.P32),
+    "dec=acc": (dict(VELOCITY=333.3, ACCELERATION=7777.0, DECELERATION=7777.0), Units.DA),
+}
+
+
+@pytest.mark.parametrize("falling", [False, True], ids=["rising", "falling"])
+@pytest.mark.parametrize("arm_input", ["LM_TRIG_GO_TO_POS", "LM_TRIG_INCREMENT"])
+@pytest.mark.parametrize("family", list(FAMILIES))
+def test_the_vai_command_sent_is_the_catalogue_row_of_that_edge_target_and_family(family, arm_input, falling):
+    """F_LmTriggerCid's IDs against protocol/commands/triggered.py: the row sent is a triggered one of that edge,
+    its units the family's, an increment row for LM_TRIG_INCREMENT; on that edge the axis ends where the inputs
+    say (12.5 mm, or 12.5 mm on from the last target)."""
+    values, units = FAMILIES[family]
+    b = bench12() if units is Units.DA else bench()
+    assert b.fb("MVA").run(POSITION=30.0, **MOVE).done           # the last target 30 mm: go to / increment differ
+    start = b.drive.mc.dem_p
+    if falling:
+        b.drive.io.set_input("X4.6", 1)
+        b.step(5)
+    t0 = b.plc.time_ns
+    trig = arm(b, ARM=arm_input, FALLING=falling, POSITION=12.5, **values)
+    cid = heads(b, t0)[-1]
+    row = C.COMMANDS[cid]
+    assert (TRIGGERED[cid].rising, TRIGGERED[cid].units) == (not falling, units)
+    assert (row.target is Target.FROM_LAST_TARGET) == (arm_input == "LM_TRIG_INCREMENT")
+    b.step(20)
+    assert b.drive.mc.dem_p == start
+    b.drive.io.set_input("X4.6", 0 if falling else 1)
+    b.sim.run_until(lambda: trig["DONE"] or trig["ERROR"], max_scans=2000)
+    assert trig["DONE"], (trig["ERRORID"], trig["DRIVEERROR"])
+    expected = 12.5 * MM + (start if arm_input == "LM_TRIG_INCREMENT" else 0)
+    assert abs(b.drive.mc.dem_p - expected) < 1
+
+
+@pytest.mark.parametrize("falling", [False, True], ids=["rising", "falling"])
+@pytest.mark.parametrize("arm_input, base", [("LM_TRIG_CURVE_TO_POS", TIME_CURVE_TO_POS),
+                                             ("LM_TRIG_COMMAND_TABLE", START_COMMAND_TABLE)])
+def test_curve_and_table_starts_are_the_catalogue_rows_of_that_edge(arm_input, base, falling):
+    b = bench()
+    curves_and_table(b)
+    t0 = b.plc.time_ns
+    arm(b, ARM=arm_input, FALLING=falling, CURVEID=1, ENTRY=5, POSITION=b.drive.mc.dem_p / MM + 15.0)
+    cid = heads(b, t0)[-1]
+    assert (TRIGGERED[cid].rising, TRIGGERED[cid].base) == (not falling, base)
