@@ -4,10 +4,11 @@ Active and CommandAborted: edge latching, exclusive outputs, Done/Error held whi
 pulses after Execute fell, re-trigger while Busy ignored, inputs latched at the rising edge, invalid inputs before
 any frame, a newer command aborting the running one. A run's frames are its RxPDOs (the motion command, or the
 control word for homing and reset), or its SDO requests (MC_WriteParameter, MC_TouchProbe).
-Three groups: the FBs that end Done (SPECS: moves, stops, homing, curves, the command table, the raw command,
+Four groups: the FBs that end Done (SPECS: moves, stops, homing, curves, the command table, the raw command,
 cams selected and decoupled, I/O, the triggered move and the touch probe, which finish on an edge of X4.6 / X4.5
 the drive's inputs get every few ms), the FBs that run until something ends them (CONTINUOUS: MC_MoveVelocity
-with InVelocity, MC_CamIn with InSync), and MC_Jog, whose JogForward / JogBackward are levels (its own rules)."""
+with InVelocity, MC_CamIn with InSync), MC_Jog, whose JogForward / JogBackward are levels (its own rules), and
+MC_Reset, which needs an error to acknowledge before each run."""
 
 from __future__ import annotations
 
@@ -455,3 +456,55 @@ def test_a_newer_command_aborts_a_jog_held_while_the_input_stays_true(newer):
     b.step(1)
     assert jog_state(b) == IDLE
     b.sim.run_until(lambda: other["DONE"], max_scans=2000)
+
+
+# ---------------------------------------------------------------- MC_Reset: each run needs an error to acknowledge
+def in_error(b: MotionBench) -> MotionBench:
+    """The drive detected a following error (000Bh, not fatal): quick stop, then state 4."""
+    b.drive.inject_error(0x000B, b.bus.now)
+    b.sim.run_until(lambda: b["RSTAT.STATEVAR"] >> 8 in (4, 14), max_scans=200)
+    return b
+
+
+def ack_edges(b: MotionBench, t0: int) -> int:
+    """Rising edges of control word bit 7 (error acknowledge) in the RxPDO1s since t0."""
+    bits = [p[0] & 0x80 for p in b.payloads(0x201, t0)]
+    return sum(1 for a, z in zip([0] + bits, bits) if z and not a)
+
+
+def test_reset_done_held_while_execute_then_reset_on_falling_edge():
+    b = in_error(MotionBench(nodes=1).ready())
+    t0 = b.plc.time_ns
+    fb = b.fb("RST")
+    check_done_held(b, fb)
+    assert fb["ERRORCLEARED"] == 0x000B and ack_edges(b, t0) == 1
+    check_reset_on_falling_edge(b, fb)
+
+
+def test_reset_done_is_a_one_scan_pulse_when_execute_fell_before():
+    b = in_error(MotionBench(nodes=1).ready())
+    check_one_scan_pulse(b, b.fb("RST"), 0)
+
+
+def test_reset_retrigger_while_busy_is_ignored():
+    b = in_error(MotionBench(nodes=1).ready())
+    b.bus.delay(lambda f: f.can_id == 0x181, 3 * MS)             # the drive's state comes late: Busy longer
+    fb = b.fb("RST")
+    t0 = b.plc.time_ns
+    states = run_recording(b, fb, execute_scans=None, retrigger_at=3)
+    assert any(s[0] for s in states) and not any(s[2] for s in states)
+    assert sum(1 for a, z in zip(states, states[1:]) if z[1] and not a[1]) == 0
+    assert ack_edges(b, t0) == 1                                  # one acknowledge
+
+
+def test_reset_without_an_error_is_done_in_its_execute_scan_without_a_frame():
+    """Nothing to acknowledge (FB_LmReset's documented case): Done at once, ErrorCleared 0, no acknowledge."""
+    b = MotionBench(nodes=1).ready()
+    t0 = b.plc.time_ns
+    fb = b.fb("RST")
+    fb["EXECUTE"] = True
+    b.step(1)
+    assert outputs(fb) == (True, False, False, False, 0) and fb["ERRORCLEARED"] == 0
+    b.step(5)
+    assert fb["DONE"] and ack_edges(b, t0) == 0
+    check_reset_on_falling_edge(b, fb)
