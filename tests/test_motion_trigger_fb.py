@@ -20,7 +20,8 @@ from linmot_st.emulator import Curve, build_entry  # noqa: E402
 from linmot_st.protocol import commands as C  # noqa: E402
 from linmot_st.protocol.commands import Target  # noqa: E402
 from linmot_st.protocol.commands.command_table import START_COMMAND_TABLE  # noqa: E402
-from linmot_st.protocol.commands.curves import TIME_CURVE_TO_POS  # noqa: E402
+from linmot_st.protocol.commands.curves import (TIME_CURVE_OFFSET_TIME_AMP, TIME_CURVE_TO_POS,  # noqa: E402
+                                                TIME_CURVE_TO_POS_TIME)
 from linmot_st.protocol.commands.triggered import TRIGGERED, Units  # noqa: E402
 from linmot_st.protocol.errors import BY_NAME  # noqa: E402
 
@@ -224,11 +225,92 @@ def test_the_vai_command_sent_is_the_catalogue_row_of_that_edge_target_and_famil
 
 @pytest.mark.parametrize("falling", [False, True], ids=["rising", "falling"])
 @pytest.mark.parametrize("arm_input, base", [("LM_TRIG_CURVE_TO_POS", TIME_CURVE_TO_POS),
+                                             ("LM_TRIG_CURVE_TO_POS_TIME", TIME_CURVE_TO_POS_TIME),
+                                             ("LM_TRIG_CURVE_TIMED", TIME_CURVE_OFFSET_TIME_AMP),
                                              ("LM_TRIG_COMMAND_TABLE", START_COMMAND_TABLE)])
 def test_curve_and_table_starts_are_the_catalogue_rows_of_that_edge(arm_input, base, falling):
-    b = bench()
+    b = bench12()
     curves_and_table(b)
     t0 = b.plc.time_ns
-    arm(b, ARM=arm_input, FALLING=falling, CURVEID=1, ENTRY=5, POSITION=b.drive.mc.dem_p / MM + 15.0)
+    arm(b, ARM=arm_input, FALLING=falling, CURVEID=1, ENTRY=5, POSITION=b.drive.mc.dem_p / MM + 15.0, CURVETIME=0.1)
     cid = heads(b, t0)[-1]
     assert (TRIGGERED[cid].rising, TRIGGERED[cid].base) == (not falling, base)
+
+
+# ---------------------------------------------------------------- the curves with a time, offset and amplitude
+def test_curve_to_position_in_a_curve_time_on_the_edge():
+    """04Exh (10 parameter bytes, RxPDO3 carrying bytes 6..9): the curve scaled to end 15 mm on, in 0.2 s."""
+    b = MotionBench(nodes=1, defaults={**TRIGGER_DIRECT, 0x2041: 1}, pdo={"RX3BYTES": 6}).ready()
+    curves_and_table(b)
+    start = b.drive.mc.dem_p
+    t0 = b.plc.time_ns
+    trig = arm(b, ARM="LM_TRIG_CURVE_TO_POS_TIME", CURVEID=1, POSITION=start / MM + 15.0, CURVETIME=0.2)
+    assert heads(b, t0) == [0x04E]
+    t_edge = b.bus.now
+    b.drive.io.set_input("X4.6", 1, t_edge)
+    b.sim.run_until(lambda: trig["DONE"] or trig["ERROR"], max_scans=3000)
+    assert trig["DONE"], (trig["ERRORID"], trig["DRIVEERROR"])
+    assert abs(b.drive.mc.dem_p - start - 15 * MM) < 2
+    moving = [s.t_ns for s in b.drive.mc.trajectory.between(t0) if s.demand_velocity != 0]
+    assert moving[0] >= t_edge and (moving[-1] - moving[0]) / 1e9 == pytest.approx(0.2, abs=0.01)
+
+
+def test_curve_with_offset_time_and_amplitude_on_the_falling_edge():
+    """047xh (12 bytes): curve 1 (0 .. 10 mm) at 50 %, from 20 mm (where the axis stands: the curve starts at its
+    offset), in 0.1 s: it ends at 25 mm."""
+    b = bench12()
+    curves_and_table(b)
+    assert b.fb("MVA").run(POSITION=20.0, **MOVE).done
+    b.drive.io.set_input("X4.6", 1)
+    b.step(5)
+    t0 = b.plc.time_ns
+    trig = arm(b, ARM="LM_TRIG_CURVE_TIMED", FALLING=True, CURVEID=1, OFFSET=20.0, CURVETIME=0.1,
+               AMPLITUDESCALE=50.0)
+    frame = b.payloads(0x301, t0)[-1] + b.payloads(0x401, t0)[-1][2:]
+    assert heads(b, t0) == [0x047] and struct.unpack_from("<HiiH", frame, 2) == (1, 20 * MM, 10_000, 500)
+    b.drive.io.set_input("X4.6", 0)
+    b.sim.run_until(lambda: trig["DONE"] or trig["ERROR"], max_scans=3000)
+    assert trig["DONE"], (trig["ERRORID"], trig["DRIVEERROR"])
+    assert abs(b.drive.mc.dem_p - 25 * MM) < 2
+
+
+@pytest.mark.parametrize("inputs, error", [
+    (dict(ARM="LM_TRIG_CURVE_TO_POS_TIME", CURVEID=1, CURVETIME=0.1), "CommandNotMapped"),   # default: 8 bytes
+    (dict(ARM="LM_TRIG_CURVE_TIMED", CURVEID=1, CURVETIME=0.1), "CommandNotMapped"),
+])
+def test_curve_variants_beyond_the_default_rxpdos_refused_before_any_frame(inputs, error):
+    b = bench()
+    t0 = b.plc.time_ns
+    r = b.fb("TRIG").run(**inputs, max_scans=5)
+    assert r.error and r.error_id == E[error] and b.payloads(0x301, t0) == []
+
+
+@pytest.mark.parametrize("inputs, error", [
+    (dict(ARM="LM_TRIG_CURVE_TO_POS_TIME", CURVEID=1, CURVETIME=0.0), "InvalidCurveTime"),
+    (dict(ARM="LM_TRIG_CURVE_TIMED", CURVEID=1, CURVETIME=0.1, AMPLITUDESCALE=2500.0), "ScaleRange"),
+    (dict(ARM="LM_TRIG_CURVE_TIMED", CURVEID=1, CURVETIME=0.1, OFFSET=1.0e6), "PositionRange"),
+])
+def test_curve_variant_inputs_refused_before_any_frame(inputs, error):
+    b = bench12()
+    t0 = b.plc.time_ns
+    r = b.fb("TRIG").run(**inputs, max_scans=5)
+    assert r.error and r.error_id == E[error] and b.payloads(0x301, t0) == [] and b.payloads(0x401, t0) == []
+
+
+def test_b1100_axis_curve_and_table_refused_and_auto_goes_predefined():
+    """A B1100 has only the predefined triggered VAIs (02Axh..02Dxh, seed 004 4.2's B1100 column); the refusal
+    and the choice depend only on the axis' drive type (the drive here is an emulated E1100)."""
+    b = bench()
+    b["CH1.DRIVE"] = "LM_B1100"
+    b.step(1)
+    t0 = b.plc.time_ns
+    for inputs in (dict(ARM="LM_TRIG_CURVE_TO_POS", CURVEID=1), dict(ARM="LM_TRIG_COMMAND_TABLE", ENTRY=5)):
+        r = b.fb("TRIG").run(**inputs, POSITION=10.0, max_scans=5)
+        assert r.error and r.error_id == E["NotSupported"]
+    assert b.payloads(0x301, t0) == []
+    trig = arm(b, POSITION=20.0)                   # AUTO, values the 16-bit scaling (still set) would carry
+    assert heads(b, t0) == [0x002, 0x002, 0x002, 0x02A]
+    assert [struct.unpack_from("<H", f, 2)[0] for f in b.payloads(0x301, t0)[:3]] == [0xD4BE, 0xD4BF, 0xD4C0]
+    b.drive.io.set_input("X4.6", 1)
+    b.sim.run_until(lambda: trig["DONE"] or trig["ERROR"], max_scans=2000)
+    assert trig["DONE"] and abs(b.drive.mc.dem_p - 20 * MM) < 1
