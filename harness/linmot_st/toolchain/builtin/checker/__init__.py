@@ -8,11 +8,11 @@ statement or declaration at most, and raised together as a BuiltinCompileError.
 
 The checker annotates the AST in place (`Expr.ty`, `Name.sym`, `Call.target`) for codegen.py.
 
-`Checker` is put together from one class per concern (as rusty's `validation/` is split), each in its module:
-names (identifiers), datatypes (TYPE declarations), initial_values, pous (POU interfaces), variables, config
-(configuration, resources, tasks, globals), statements, calls (FB and FUNCTION calls), std_calls (standard
-functions, from stdfuncs.py's table), coercion (the typing core), literals and expressions; base holds the
-state they share and the diagnostics. The parts call one another through `self`.
+`Checker` is put together from one class per concern (as rusty's `validation/` is split), each in its
+module: names (identifiers), datatypes (TYPE declarations), initial_values, pous (POU interfaces), variables,
+config (configuration, resources, tasks, globals), statements, calls (FB and FUNCTION calls), std_calls
+(standard functions: the typing rule of their row in stdfuncs/table.py), coercion (the typing core), literals
+and expressions; base holds the state they share and the diagnostics. The parts call one another through `self`.
 """
 
 from __future__ import annotations

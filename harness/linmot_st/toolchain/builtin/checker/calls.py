@@ -18,13 +18,6 @@ def _has_index(e: A.Node) -> bool:
     return False
 
 
-# functions outside the subset that people reach for: a clear message instead of "unknown function"
-UNSUPPORTED_FUNCTIONS = {
-    "SIZEOF": "SIZEOF", "ADR": "ADR", "REF": "REF()", "LOWER_BOUND": "LOWER_BOUND", "UPPER_BOUND": "UPPER_BOUND",
-    "MEMCPY": "MEMCPY", "ASC": "ASC", "CHR": "CHR", "LEN_WSTRING": "WSTRING functions", "NEW": "__NEW",
-}
-
-
 class Calls:
     def call_statement(self, call: A.Call) -> None:
         k = call.name.upper()
@@ -163,6 +156,6 @@ class Calls:
         if k in SF.MISSING_IN_MATIEC_C:
             self.error(e.pos, f"{e.name} is outside the supported subset (MatIEC declares it but its C library lacks "
                               f"it); call the overloaded {k.split('_')[0]}")
-        if k in UNSUPPORTED_FUNCTIONS:
-            self.error(e.pos, f"{UNSUPPORTED_FUNCTIONS[k]} is outside the supported subset (MatIEC)")
+        if k in SF.UNSUPPORTED_FUNCTIONS:
+            self.error(e.pos, f"{SF.UNSUPPORTED_FUNCTIONS[k]} is outside the supported subset (MatIEC)")
         self.error(e.pos, f"unknown function '{e.name}' (functions must be declared before they are used)")

@@ -8,7 +8,6 @@ import re
 from .. import ast as A
 from .. import types as T
 
-
 FLT_MAX, FLT_MIN = 3.4028234663852886e38, 1.1754943508222875e-38
 
 

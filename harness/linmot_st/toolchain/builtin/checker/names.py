@@ -7,11 +7,9 @@ import json
 from pathlib import Path
 
 from .. import ast as A
-from .. import matiec_c_macros
-from .. import stdfb
+from .. import matiec_c_macros, stdfb
 from .. import stdfuncs as SF
 from .. import types as T
-
 
 KEYWORDS = {
     "ACTION", "END_ACTION", "ARRAY", "OF", "AT", "CASE", "ELSE", "END_CASE", "CONFIGURATION", "END_CONFIGURATION",

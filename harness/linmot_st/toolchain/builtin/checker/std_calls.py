@@ -1,4 +1,5 @@
-"""Calls of the standard functions (stdfuncs.py's table): arguments, the type variable, the result."""
+"""Calls of the standard functions: the arguments bound to the family's formal parameters, then the typing rule
+its row in stdfuncs/table.py names (RULES), which resolves the type variable and the result."""
 
 from __future__ import annotations
 
@@ -6,14 +7,12 @@ from .. import ast as A
 from .. import stdfuncs as SF
 from .. import types as T
 
-
-def _shiftable(t) -> bool:
-    return T.is_bit(t) and not T.same(t, T.BOOL)
-
-
-def _selectable(t: T.Type) -> bool:
-    tb = t.base()
-    return isinstance(tb, T.Elem)
+# the typing rules a family's row names (`rule`), and the method of StdCalls that applies each
+RULES = {
+    "conv": "rule_conv", "arith": "rule_arith", "tvar": "rule_tvar", "math": "rule_math", "multime": "rule_multime",
+    "concat_date_tod": "rule_concat_date_tod", "expt": "rule_expt", "trunc": "rule_trunc", "string": "rule_string",
+    "shift": "rule_shift", "sel": "rule_sel", "mux": "rule_mux", "compare": "rule_compare",
+}
 
 
 class StdCalls:
@@ -60,119 +59,132 @@ class StdCalls:
         sc = SF.StdCall(fam.name, args, kind=lk.kind, extra=lk.extra)
         e.target = sc
         name = e.name.upper()
-        n = fam.name
-
-        def arg_types():
-            return [self.infer(a) for a in args]
-
-        if n == "CONV":
-            if lk.conv is not None:
-                src, dst = lk.conv
-                self.coerce(args[0], src, f"argument of {name}")
-                sc.conv = (src, dst)
-                return dst
-            if lk.kind == "bcd_decode":          # BCD_TO_USINT(ANY_NBIT)
-                t = self.concrete_as(args[0], T.LWORD)
-                if t.base() not in T.NBITS:
-                    self.error(args[0].pos, f"{name} needs BYTE, WORD, DWORD or LWORD")
-                sc.conv = (t.base(), lk.extra)
-                return lk.extra
-            src = lk.extra                       # USINT_TO_BCD: result BYTE..LWORD from context
-            self.coerce(args[0], src, f"argument of {name}")
-            default = {T.USINT: T.BYTE, T.UINT: T.WORD, T.UDINT: T.DWORD, T.ULINT: T.LWORD}[src]
-            sc.conv = (src, None)
-            return T.poly(T.NBITS, default)
-        if lk.kind == "time_arith":
+        if lk.kind == "time_arith":             # ADD_TOD_TIME...: the types are the name's
             (a_t, b_t), res = lk.extra
             self.coerce(args[0], a_t, f"IN1 of {name}")
             self.coerce(args[1], b_t, f"IN2 of {name}")
             sc.ty = a_t
             sc.extra = ("time", res)
             return res
-        if n in ("ADD", "SUB", "MUL", "DIV") and lk.fixed is None:
-            tys = arg_types()
+        return getattr(self, RULES[fam.rule])(e, lk, sc, fam, args, name)
+
+    def rule_conv(self, e, lk, sc, fam, args, name) -> T.Type:
+        if lk.conv is not None:
+            src, dst = lk.conv
+            self.coerce(args[0], src, f"argument of {name}")
+            sc.conv = (src, dst)
+            return dst
+        if lk.kind == "bcd_decode":          # BCD_TO_USINT(ANY_NBIT)
+            t = self.concrete_as(args[0], T.LWORD)
+            if t.base() not in T.NBITS:
+                self.error(args[0].pos, f"{name} needs BYTE, WORD, DWORD or LWORD")
+            sc.conv = (t.base(), lk.extra)
+            return lk.extra
+        src = lk.extra                       # USINT_TO_BCD: result BYTE..LWORD from context
+        self.coerce(args[0], src, f"argument of {name}")
+        default = {T.USINT: T.BYTE, T.UINT: T.WORD, T.UDINT: T.DWORD, T.ULINT: T.LWORD}[src]
+        sc.conv = (src, None)
+        return T.poly(T.NBITS, default)
+
+    def rule_arith(self, e, lk, sc, fam, args, name) -> T.Type:
+        """ADD, SUB, MUL, DIV: of durations and dates as the operators are, else of numbers (rule_tvar)."""
+        if lk.fixed is None:
+            tys = [self.infer(a) for a in args]
             firsts = [t for t in tys if not isinstance(t, T.Pseudo)]
             if firsts and T.is_time_like(firsts[0]) or (tys and not isinstance(tys[0], T.Pseudo) and T.is_time_like(tys[0])):
                 if len(args) != 2:
                     self.error(e.pos, f"{name} of durations takes two arguments")
-                fake = A.BinOp(e.pos, {"ADD": "+", "SUB": "-", "MUL": "*", "DIV": "/"}[n], args[0], args[1])
+                fake = A.BinOp(e.pos, fam.op, args[0], args[1])
                 res = self.time_arith(fake, fake.op, args[0], args[1], tys[0], tys[1])
                 sc.ty = tys[0].base()
                 sc.extra = ("time", res)
                 return res
-        if n in ("MULTIME", "DIVTIME"):
-            self.coerce(args[0], T.TIME, f"IN1 of {name}")
-            t = self.concrete(args[1])
-            if lk.fixed is not None and not T.same(t, lk.fixed):
-                self.error(args[1].pos, f"IN2 of {name} must be {lk.fixed.name}")
-            if not T.is_num(t):
-                self.error(args[1].pos, f"IN2 of {name} must be a number")
-            sc.ty = T.TIME
-            sc.extra = ("time", T.TIME)
-            return T.TIME
-        if n == "CONCAT_DATE_TOD":
-            self.coerce(args[0], T.DATE, "IN1 of CONCAT_DATE_TOD")
-            self.coerce(args[1], T.TOD, "IN2 of CONCAT_DATE_TOD")
-            return T.DT
-        if n == "EXPT":
-            fake = A.BinOp(e.pos, "**", args[0], args[1])
-            t = self.infer_BinOp(fake)
-            if lk.fixed is not None:
-                self.coerce(args[0], lk.fixed, f"IN1 of {name}")
-                t = lk.fixed
-            sc.ty = t if not isinstance(t, T.Pseudo) else None
-            return t
-        if n == "TRUNC":
-            t = self.concrete_as(args[0], T.LREAL)
-            if not T.is_real(t):
-                self.error(args[0].pos, f"TRUNC needs a REAL or LREAL, not {T.describe(t)}")
-            return T.poly(T.INTS, T.DINT)
-        if n in ("LEN", "FIND", "LEFT", "RIGHT", "MID", "CONCAT", "INSERT", "DELETE", "REPLACE"):
-            return self.string_call(e, sc, n, args)
-        if n in ("SHL", "SHR", "ROL", "ROR"):
-            nt = self.concrete(args[1])
-            if not T.is_int(nt):
-                self.error(args[1].pos, f"N of {name} must be an integer, not {T.describe(nt)}")
-            # no BOOL: iec2c accepts SHL(b, 1) but calls SHL__BOOL__BOOL__SINT, which its headers do not define
-            return self.tvar(e, sc, [args[0]], lk.fixed, _shiftable,
-                             "a bit string other than BOOL (BYTE, WORD, DWORD or LWORD: iec2c accepts a BOOL, but "
-                             "MatIEC's C defines no shift or rotate of a BOOL and does not compile)", name)
-        if n == "SEL":
-            self.coerce(args[0], T.BOOL, f"G of {name}")
-            return self.tvar(e, sc, args[1:], lk.fixed, _selectable, "an elementary value", name)
-        if n == "MUX":
-            kt = self.concrete(args[0])
-            if lk.kind == "mux_k" and not T.same(kt, lk.extra):
-                self.error(args[0].pos, f"K of {name} must be {lk.extra.name}")
-            if not T.is_int(kt):
-                self.error(args[0].pos, f"K of MUX must be an integer, not {T.describe(kt)}")
-            if len(args) < 2:
-                self.error(e.pos, "MUX needs at least one input")
-            return self.tvar(e, sc, args[1:], lk.fixed, _selectable, "an elementary value", name)
-        if n in ("GT", "GE", "EQ", "LE", "LT", "NE"):
-            t = self.tvar(e, sc, args, lk.fixed, _selectable, "an elementary value", name)
-            if isinstance(t, T.Pseudo):
-                for a in args:
-                    self.settle(a, t.default)
-                sc.ty = t.default
-            return T.BOOL
-        rules = {
-            "ADD": (T.is_num, "a number"), "MUL": (T.is_num, "a number"), "SUB": (T.is_num, "a number"),
-            "DIV": (T.is_num, "a number"), "MOD": (T.is_int, "an integer"), "ABS": (T.is_num, "a number"),
-            "AND": (T.is_bit, "a bit string"), "OR": (T.is_bit, "a bit string"), "XOR": (T.is_bit, "a bit string"),
-            "NOT": (T.is_bit, "a bit string"), "MOVE": (_selectable, "an elementary value"),
-            "MAX": (_selectable, "an elementary value"), "MIN": (_selectable, "an elementary value"),
-            "LIMIT": (_selectable, "an elementary value"),
-        }
-        for m in SF.MATH_1:
-            rules[m] = (T.is_real, "a REAL or LREAL")
-        pred, what = rules[n]
-        t = self.tvar(e, sc, args, lk.fixed, pred, what, name)
-        if n in SF.MATH_1 and isinstance(t, T.Pseudo) and t is T.LIT_INT:
+        return self.rule_tvar(e, lk, sc, fam, args, name)
+
+    def rule_tvar(self, e, lk, sc, fam, args, name) -> T.Type:
+        """All arguments and the result of one type, which the row's `accepts` allows."""
+        pred, what = fam.accepts
+        return self.tvar(e, sc, args, lk.fixed, pred, what, name)
+
+    def rule_math(self, e, lk, sc, fam, args, name) -> T.Type:
+        t = self.rule_tvar(e, lk, sc, fam, args, name)
+        if isinstance(t, T.Pseudo) and t is T.LIT_INT:
             self.error(e.pos, f"{name} needs a REAL or LREAL argument")
-        if n == "DIV" and self._is_zero(args[1]) and (isinstance(t, T.Pseudo) or T.is_int(t)):
-            pass    # DIV(x, 0) is defined (0, as MatIEC's DIV function returns); only the operator faults
         return t
+
+    def rule_multime(self, e, lk, sc, fam, args, name) -> T.Type:
+        self.coerce(args[0], T.TIME, f"IN1 of {name}")
+        t = self.concrete(args[1])
+        if lk.fixed is not None and not T.same(t, lk.fixed):
+            self.error(args[1].pos, f"IN2 of {name} must be {lk.fixed.name}")
+        if not T.is_num(t):
+            self.error(args[1].pos, f"IN2 of {name} must be a number")
+        sc.ty = T.TIME
+        sc.extra = ("time", T.TIME)
+        return T.TIME
+
+    def rule_concat_date_tod(self, e, lk, sc, fam, args, name) -> T.Type:
+        self.coerce(args[0], T.DATE, "IN1 of CONCAT_DATE_TOD")
+        self.coerce(args[1], T.TOD, "IN2 of CONCAT_DATE_TOD")
+        return T.DT
+
+    def rule_expt(self, e, lk, sc, fam, args, name) -> T.Type:
+        fake = A.BinOp(e.pos, "**", args[0], args[1])
+        t = self.infer_BinOp(fake)
+        if lk.fixed is not None:
+            self.coerce(args[0], lk.fixed, f"IN1 of {name}")
+            t = lk.fixed
+        sc.ty = t if not isinstance(t, T.Pseudo) else None
+        return t
+
+    def rule_trunc(self, e, lk, sc, fam, args, name) -> T.Type:
+        t = self.concrete_as(args[0], T.LREAL)
+        if not T.is_real(t):
+            self.error(args[0].pos, f"TRUNC needs a REAL or LREAL, not {T.describe(t)}")
+        return fam.result()
+
+    def rule_string(self, e, lk, sc, fam, args, name) -> T.Type:
+        """The string functions: each argument a STRING or an integer (the row's layout)."""
+        for a, kind in zip(args, SF.string_layout(fam, len(args))):
+            if kind == "S":
+                self.coerce(a, T.STRING, f"argument of {name}")
+            else:
+                t = self.concrete(a)
+                if not T.is_int(t):
+                    self.error(a.pos, f"{name}: an integer is expected, not {T.describe(t)}")
+        return fam.result() if fam.result is not None else T.STRING
+
+    def rule_shift(self, e, lk, sc, fam, args, name) -> T.Type:
+        nt = self.concrete(args[1])
+        if not T.is_int(nt):
+            self.error(args[1].pos, f"N of {name} must be an integer, not {T.describe(nt)}")
+        pred, what = fam.accepts
+        return self.tvar(e, sc, [args[0]], lk.fixed, pred, what, name)
+
+    def rule_sel(self, e, lk, sc, fam, args, name) -> T.Type:
+        self.coerce(args[0], T.BOOL, f"G of {name}")
+        pred, what = fam.accepts
+        return self.tvar(e, sc, args[1:], lk.fixed, pred, what, name)
+
+    def rule_mux(self, e, lk, sc, fam, args, name) -> T.Type:
+        kt = self.concrete(args[0])
+        if lk.kind == "mux_k" and not T.same(kt, lk.extra):
+            self.error(args[0].pos, f"K of {name} must be {lk.extra.name}")
+        if not T.is_int(kt):
+            self.error(args[0].pos, f"K of MUX must be an integer, not {T.describe(kt)}")
+        if len(args) < 2:
+            self.error(e.pos, "MUX needs at least one input")
+        pred, what = fam.accepts
+        return self.tvar(e, sc, args[1:], lk.fixed, pred, what, name)
+
+    def rule_compare(self, e, lk, sc, fam, args, name) -> T.Type:
+        pred, what = fam.accepts
+        t = self.tvar(e, sc, args, lk.fixed, pred, what, name)
+        if isinstance(t, T.Pseudo):
+            for a in args:
+                self.settle(a, t.default)
+            sc.ty = t.default
+        return T.BOOL
 
     def concrete_as(self, e, default: T.Type) -> T.Type:
         t = self.infer(e)
@@ -232,20 +244,3 @@ class StdCalls:
             sc.conv = (sc.conv[0], t)
         else:
             sc.ty = t
-
-    def string_call(self, e, sc, n, args) -> T.Type:
-        name = e.name.upper()
-        layout = {
-            "LEN": "S", "FIND": "SS", "LEFT": "SI", "RIGHT": "SI", "MID": "SII", "CONCAT": "S" * len(args),
-            "INSERT": "SSI", "DELETE": "SII", "REPLACE": "SSII",
-        }[n]
-        for a, kind in zip(args, layout):
-            if kind == "S":
-                self.coerce(a, T.STRING, f"argument of {name}")
-            else:
-                t = self.concrete(a)
-                if not T.is_int(t):
-                    self.error(a.pos, f"{name}: an integer is expected, not {T.describe(t)}")
-        if n in ("LEN", "FIND"):
-            return T.poly(T.INTS, T.INT)
-        return T.STRING

@@ -9,7 +9,6 @@ from .. import types as T
 from ..symbols import LocatedCell, PouSym, Var
 from .base import _Abort
 
-
 LOCATION_RE = re.compile(r"%([IQM])([XBWDL]?)(\d+(?:\.\d+)*)$")
 
 
