@@ -53,9 +53,9 @@ class BuiltinOutput:
 @functools.lru_cache(maxsize=1)
 def backend_version() -> str:
     h = hashlib.sha256()
-    for p in sorted(PACKAGE_DIR.iterdir()):
+    for p in sorted(PACKAGE_DIR.rglob("*")):        # (the checker is a package of its own: checker/)
         if p.suffix in (".py", ".lark", ".h", ".json"):
-            h.update(p.name.encode())
+            h.update(p.relative_to(PACKAGE_DIR).as_posix().encode())
             h.update(p.read_bytes())
     return "builtin-" + h.hexdigest()[:12]
 

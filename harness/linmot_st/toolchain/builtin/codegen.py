@@ -21,29 +21,13 @@ from . import ast as A
 from . import stdfuncs as SF
 from . import types as T
 from . import units as U
+from .cnames import cname_of, is_time
 from .errors import BuiltinCompileError, Diagnostic
 from .symbols import PouSym, Program, Var
 
 FORCE = "__FORCED"
 # operators of a left-associative chain per C sub-expression (gcc parses nesting recursively)
 CHAIN_CHUNK = 200
-
-
-def cname_of(t: T.Type) -> str:
-    """C storage type of an IEC type."""
-    t = t.base() if isinstance(t, (T.Alias, T.Subrange)) else t
-    if isinstance(t, T.Pseudo):
-        t = t.default
-    return t.cname
-
-
-def is_time(t: T.Type) -> bool:
-    return T.is_time_like(t)
-
-
-def vtype(t: T.Type) -> str:
-    """C type of a value of t in an expression."""
-    return "__ns_t" if is_time(t) else cname_of(t)
 
 
 def c_string(data: bytes) -> str:
@@ -1021,7 +1005,7 @@ class CodeGen:
     # ------------------------------------------------------------------ calls
     def ex_Call(self, e: A.Call) -> str:
         if isinstance(e.target, SF.StdCall):
-            return self.std_call(e, e.target)
+            return SF.c_call(self, e, e.target)      # stdfuncs/: its table and C
         pou, _, bound = e.target
         by_param = {p.key: a for p, a in bound}
         args, pre, post = [], [], []
@@ -1101,204 +1085,6 @@ class CodeGen:
             r = self.new_tmp()
             call = "({ " + " ".join(pre) + f" {cname_of(pou.return_type)} {r} = {call}; " + " ".join(post) + f" {r}; }})"
         return self.read(call, pou.return_type)
-
-    def std_call(self, e: A.Call, sc: SF.StdCall) -> str:
-        n = sc.name
-        args = sc.args
-        t = e.ty.base() if e.ty is not None else None
-        if n == "CONV":
-            return self.conversion(sc, args[0], e)
-        if isinstance(sc.extra, tuple) and sc.extra and sc.extra[0] == "time":
-            op = {"ADD": "+", "SUB": "-", "MUL": "*", "DIV": "/", "MULTIME": "*", "DIVTIME": "/"}[n]
-            fake = A.BinOp(e.pos, op, args[0], args[1])
-            fake.ty = e.ty
-            fake.time = True
-            return self.time_binop(fake, self.expr(args[0]))
-        # a REAL argument is rounded to REAL, as when MatIEC passes it to its C function
-        cs = [f"((REAL)({self.expr(a)}))" if a.ty is not None and a.ty.base() is T.REAL else self.expr(a)
-              for a in args]
-        if n in ("ADD", "MUL", "SUB"):
-            op = {"ADD": "+", "MUL": "*", "SUB": "-"}[n]
-            acc = cs[0]
-            for c in cs[1:]:
-                acc = self.arith(op, acc, c, t)
-            return acc
-        if n == "DIV":
-            if t.kind == "real":
-                return f"({cs[0]} / {cs[1]})"
-            return f"__divf_{t.cname}({cs[0]}, {cs[1]})"
-        if n == "MOD":
-            return f"__mod_{t.cname}({cs[0]}, {cs[1]})"
-        if n == "EXPT":
-            return f"(({cname_of(t)})__builtin_pow((double)({cs[0]}), (double)({cs[1]})))"
-        if n == "ABS":
-            if t.kind == "uint":
-                return cs[0]
-            if t.kind == "real":
-                return f"({'__builtin_fabsf' if t is T.REAL else '__builtin_fabs'}({cs[0]}))"
-            tmp = self.new_tmp()
-            u = "unsigned long long" if t.bits == 64 else "unsigned"
-            return f"({{ {t.cname} {tmp} = {cs[0]}; {tmp} < 0 ? ({t.cname})(0 - ({u}){tmp}) : {tmp}; }})"
-        if n in SF.MATH_1:
-            fn = {"SQRT": "sqrt", "LN": "log", "LOG": "log10", "EXP": "exp", "SIN": "sin", "COS": "cos",
-                  "TAN": "tan", "ASIN": "asin", "ACOS": "acos", "ATAN": "atan"}[n]
-            return f"(({t.cname})__builtin_{fn}((double)({cs[0]})))"
-        if n == "MOVE":
-            return cs[0]
-        if n == "TRUNC":
-            return self.trunc(t, cs[0], e.pos)
-        if n in ("AND", "OR", "XOR"):
-            op = {"AND": "AND", "OR": "OR", "XOR": "XOR"}[n]
-            acc = cs[0]
-            for c in cs[1:]:
-                if t is T.BOOL:
-                    acc = f"({acc} {'&&' if op == 'AND' else '||' if op == 'OR' else '^'} {c})"
-                else:
-                    acc = f"(({t.cname})({acc} {'&' if op == 'AND' else '|' if op == 'OR' else '^'} {c}))"
-            return acc
-        if n == "NOT":
-            return f"(!{cs[0]})" if t is T.BOOL else f"(({t.cname})~{cs[0]})"
-        if n in ("SHL", "SHR", "ROL", "ROR"):
-            return f"__{n.lower()}_{t.cname}({cs[0]}, (long long)({cs[1]}), {self.site(e.pos).args()})"
-        if n == "SEL":
-            return f"({cs[0]} ? {cs[2]} : {cs[1]})"
-        if n in ("MAX", "MIN"):
-            return self.extreme(n, cs, sc.ty.base() if sc.ty else t)
-        if n == "LIMIT":
-            vt = vtype(t)
-            mn, x, mx = (self.new_tmp() for _ in range(3))
-            gt = self.cmp_expr(">", x, mn, t)
-            lt = self.cmp_expr("<", x, mx, t)
-            return f"({{ {vt} {mn} = {cs[0]}, {x} = {cs[1]}, {mx} = {cs[2]}; {gt} ? ({lt} ? {x} : {mx}) : {mn}; }})"
-        if n == "MUX":
-            k = self.new_tmp()
-            vt = vtype(t)
-            default = self.read(self.c_value_expr(t, self.default_value(t)), t) if is_time(t) else \
-                self.c_value_expr(t, self.default_value(t))
-            chain = default
-            for i in range(len(cs) - 1, 0, -1):
-                chain = f"({k} == {i - 1} ? {cs[i]} : {chain})"
-            return f"({{ long long {k} = (long long)({cs[0]}); ({vt}){chain}; }})"
-        if n in ("GT", "GE", "EQ", "LE", "LT", "NE"):
-            op = {"GT": ">", "GE": ">=", "EQ": "=", "LE": "<=", "LT": "<", "NE": "<>"}[n]
-            at = sc.ty.base()
-            if len(cs) == 2:
-                return self.cmp_expr(op, cs[0], cs[1], at)
-            tmps = [self.new_tmp() for _ in cs]
-            decl = f"{vtype(at)} " + ", ".join(f"{tn} = {c}" for tn, c in zip(tmps, cs))
-            chain = " && ".join(self.cmp_expr(op, tmps[i], tmps[i + 1], at) for i in range(len(tmps) - 1))
-            return f"({{ {decl}; ({chain}); }})"
-        if n == "LEN":
-            return f"(({t.cname})({cs[0]}).len)"
-        if n == "FIND":
-            return f"(({t.cname})__str_find({cs[0]}, {cs[1]}))"
-        if n == "LEFT":
-            return f"__str_left({cs[0]}, (long long)({cs[1]}))"
-        if n == "RIGHT":
-            return f"__str_right({cs[0]}, (long long)({cs[1]}))"
-        if n == "MID":
-            return f"__str_mid({cs[0]}, (long long)({cs[1]}), (long long)({cs[2]}))"
-        if n == "CONCAT":
-            acc = cs[0]
-            for c in cs[1:]:
-                acc = f"__str_concat2({acc}, {c})"
-            return acc
-        if n == "INSERT":
-            return f"__str_insert({cs[0]}, {cs[1]}, (long long)({cs[2]}))"
-        if n == "DELETE":
-            return f"__str_delete({cs[0]}, (long long)({cs[1]}), (long long)({cs[2]}))"
-        if n == "REPLACE":
-            return f"__str_replace({cs[0]}, {cs[1]}, (long long)({cs[2]}), (long long)({cs[3]}))"
-        if n == "CONCAT_DATE_TOD":
-            return f"({cs[0]} + {cs[1]})"
-        raise AssertionError(f"standard function {n}")
-
-    def arith(self, op: str, a: str, b: str, t: T.Elem) -> str:
-        if t.kind == "real":
-            return f"({a} {op} {b})"
-        u = "unsigned long long" if t.bits == 64 else "unsigned"
-        return f"(({t.cname})(({u}){a} {op} ({u}){b}))"
-
-    def cmp_expr(self, op: str, a: str, b: str, t: T.Type) -> str:
-        cop = {"=": "==", "<>": "!="}.get(op, op)
-        tb = t.base()
-        if isinstance(tb, T.Elem) and tb.kind == "string":
-            return f"(__STRCMP({a}, {b}) {cop} 0)"
-        return f"({a} {cop} {b})"
-
-    def extreme(self, n: str, cs: list[str], t: T.Type) -> str:
-        vt = vtype(t)
-        acc = self.new_tmp()
-        parts = [f"{vt} {acc} = {cs[0]}"]
-        op = "<" if n == "MAX" else ">"
-        for c in cs[1:]:
-            x = self.new_tmp()
-            parts.append(f"{vt} {x} = {c}")
-            parts.append(f"if ({self.cmp_expr(op, acc, x, t)}) {acc} = {x}")
-        return "({ " + "; ".join(parts) + f"; {acc}; }})"
-
-    def trunc(self, t: T.Type, a: str, pos: A.Pos) -> str:
-        """TRUNC to t: faults where MatIEC's direct C cast is undefined (the value does not fit t)."""
-        site = self.site(pos).args()
-        if t.kind == "uint":
-            return f"(({t.cname})__trunc_u((double)({a}), {float(2 ** t.bits)!r}, {site}))"
-        # the double just below -2^(bits-1), which -2^(bits-1) - 1 rounds to for 64 bits
-        lo = -(2.0 ** (t.bits - 1)) - (1.0 if t.bits < 64 else 2048.0)
-        return f"(({t.cname})__trunc_s((double)({a}), {lo!r}, {float(2 ** (t.bits - 1))!r}, {site}))"
-
-    def conversion(self, sc: SF.StdCall, arg: A.Node, e: A.Call) -> str:
-        src, dst = sc.conv
-        if dst is None:
-            dst = e.ty.base()
-        dst = dst.base()
-        a = self.expr(arg)
-        if src is T.REAL:
-            a = f"((REAL)({a}))"
-        if sc.kind == "bcd_decode":
-            return f"(({dst.cname})__bcd_to_uint((unsigned long long)({a})))"
-        if sc.kind == "bcd_encode":
-            return f"(({dst.cname})__uint_to_bcd((unsigned long long)({a})))"
-        s, d = src.kind, dst.kind
-        if src is dst:
-            return a
-        if d == "string":
-            return {
-                "bool": f"__str_from_bool({a})", "sint": f"__str_from_sint((long long)({a}))",
-                "uint": f"__str_from_uint((unsigned long long)({a}))", "bit": f"__str_from_bits((unsigned long long)({a}))",
-                "real": f"__str_from_real((double)({a}))", "time": f"__str_from_time({a})",
-                "date": f"__str_from_date({a})", "tod": f"__str_from_tod({a})", "dt": f"__str_from_dt({a})",
-            }[s]
-        if s == "string":
-            if d == "bool":
-                return f"__str_to_bool({a})"
-            if d in ("sint", "uint", "bit"):
-                return f"(({dst.cname})__str_to_int({a}))"
-            if d == "real":
-                return f"(({dst.cname})__str_to_real({a}))"
-            return f"__str_to_time({a})"
-        if d == "bool":
-            return f"({a} != 0)"
-        if s in ("time", "date", "tod", "dt"):
-            if d in ("time", "date", "tod", "dt"):
-                if s == "dt" and d == "tod":
-                    return f"__dt_to_tod({a})"
-                if s == "dt" and d == "date":
-                    return f"__dt_to_date({a})"
-                return a
-            if d == "real":
-                return f"(({dst.cname})((double)({a}) / 1e9))"
-            return f"(({dst.cname})(({a}) / 1000000000LL))"
-        if d in ("time", "date", "tod", "dt"):
-            if s == "real":
-                return f"__r2time((double)({a}), {self.site(e.pos).args()})"
-            if s == "uint" or s == "bit":
-                return f"((__ns_t)((unsigned long long)({a}) * 1000000000ULL))"
-            return f"((__ns_t)((unsigned long long)(long long)({a}) * 1000000000ULL))"
-        if s == "real" and d in ("sint",):
-            return f"(({dst.cname})__r2i((double)({a}), {self.site(e.pos).args()}))"
-        if s == "real" and d in ("uint", "bit"):
-            return f"(({dst.cname})__r2u((double)({a}), {self.site(e.pos).args()}))"
-        return f"(({dst.cname})({a}))"
 
     # ------------------------------------------------------------------ configuration
     def config_code(self) -> list[str]:
