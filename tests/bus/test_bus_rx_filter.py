@@ -4,15 +4,14 @@ not (docs/bus.md, "Receive filters" and "Transmit queues")."""
 
 from __future__ import annotations
 
-from pathlib import Path
 
 import pytest
 
 import linmot_st.bus as bus_pkg
 from linmot_st.bus import Frame, SimBus
 from linmot_st.bus.nodes import ScriptedNode
+from repo_paths import REPO
 
-REPO = Path(__file__).resolve().parents[1]
 
 
 class Recorder(ScriptedNode):

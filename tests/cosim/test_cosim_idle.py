@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import dataclasses
 import os
-from pathlib import Path
 
 import pytest
 
@@ -14,8 +13,8 @@ from linmot_st.bus import Frame, SimBus
 from linmot_st.bus.nodes import ScriptedNode
 from linmot_st.cosim import CoSim, IdlePredicate
 from linmot_st.toolchain.testing import BACKEND_PARAMS
+from repo_paths import REPO
 
-REPO = Path(__file__).resolve().parents[1]
 MB = "CONFIG0.RES0.CAN0"
 
 # Echoes what it receives (Id + 1), sends a heartbeat every Period of its timer while Gate is TRUE (a test

@@ -3,7 +3,6 @@
 import os
 import time
 import uuid
-from pathlib import Path
 
 import pytest
 
@@ -11,8 +10,8 @@ from linmot_st.bus import Frame, NodeServer, SimBus, open_bus
 from linmot_st.bus.bench import ECHO_ST
 from linmot_st.bus.nodes import ScriptedNode
 from linmot_st.cosim import CoSim, RealTimeCoSim
+from repo_paths import REPO
 
-REPO = Path(__file__).resolve().parents[1]
 MB = "CONFIG0.RES0.CAN0"
 
 

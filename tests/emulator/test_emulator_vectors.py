@@ -14,7 +14,6 @@ from __future__ import annotations
 import functools
 import json
 import time
-from pathlib import Path
 
 import pytest
 
@@ -22,9 +21,10 @@ from linmot_st.bus import Frame
 from linmot_st.emulator import (DriveTimings, E1100Drive, ErrorEntry, ErrorLog, build_entry,
                                 load_profile)
 from linmot_st.emulator.testing import DirectLink, ServedDrive
+import repo_paths
 from shared_vectors import seed_curve
 
-VECTORS = json.loads((Path(__file__).parent / "vectors" / "sdo_frames.json").read_text())
+VECTORS = json.loads((repo_paths.VECTORS / "sdo_frames.json").read_text())
 S = 1_000_000_000
 MS = 1_000_000
 TOLERANCE_NS = 1_000_000

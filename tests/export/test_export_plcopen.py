@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import re
 import subprocess
 import textwrap
 from pathlib import Path
@@ -30,8 +29,8 @@ from linmot_st.toolchain import matiec as matiec_mod
 from linmot_st.toolchain.builtin import ast as A
 from linmot_st.toolchain.builtin.parser import parse
 from linmot_st.toolchain.testing import MATIEC_MISSING
+from repo_paths import REPO
 
-REPO = Path(__file__).resolve().parents[1]
 LIBRARY = REPO / "st_lib" / "linmot.st"
 SCHEMA = REPO.parent / "shared" / "plcopen" / "tc6_xml_v201.xsd"
 requires_schema = pytest.mark.skipif(

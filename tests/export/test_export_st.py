@@ -21,8 +21,8 @@ from linmot_st.export.st import package_version
 from linmot_st.toolchain import build, sources
 from linmot_st.toolchain import matiec as matiec_mod
 from linmot_st.toolchain.testing import MATIEC_MISSING
+from repo_paths import REPO
 
-REPO = Path(__file__).resolve().parents[1]
 LIBRARY = REPO / "st_lib" / "linmot.st"
 MATIEC = matiec_mod.find()
 requires_iec2c = pytest.mark.skipif(MATIEC is None, reason=MATIEC_MISSING)

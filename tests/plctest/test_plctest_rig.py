@@ -22,11 +22,6 @@ EXAMPLE = resources.CHECKOUT / "examples" / "user_project"
 ST = "MAIN.STATION"
 
 
-@pytest.fixture(scope="module")
-def station():
-    return Project(root=EXAMPLE).build(backend="builtin")
-
-
 def test_conditions_in_iec_text(station):
     rig = Rig(station, timings="fast")
     assert condition(rig.plc, f"{ST}.STATE = ST_BOOT").test()

@@ -178,13 +178,6 @@ def test_the_ini_options_give_every_test_a_scope(pytester):
     assert (pytester.path / "out/test_ini.test_fails.png").read_bytes()[:4] == b"\x89PNG"
 
 
-@pytest.fixture(scope="module")
-def station():
-    from linmot_st import resources
-    from linmot_st.plctest.project import Project
-    return Project(root=resources.CHECKOUT / "examples" / "user_project").build(backend="builtin")
-
-
 def test_the_drive_beside_the_plc_and_a_scope_changes_nothing(station):
     """The station moves its axis to 20 mm, then runs a 100 mm curve: the drive's signals show it. Recording
     every scan (scan-by-scan stepping, the drives brought to each scan's time) leaves the CAN trace as it is."""

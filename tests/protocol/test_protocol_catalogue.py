@@ -5,8 +5,6 @@ encoder encodes it as the Python codec does."""
 from __future__ import annotations
 
 import json
-import sys
-from pathlib import Path
 
 import pytest
 
@@ -17,8 +15,9 @@ from linmot_st.protocol import commands as C
 from linmot_st.protocol import generate
 from linmot_st.protocol import words as W
 
-sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
 from stbench import available_backends  # noqa: E402
+from catalogue_programs import encoder_program  # noqa: E402
+from repo_paths import VECTORS  # noqa: E402
 
 MS = 1_000_000
 MM = 10_000
@@ -47,7 +46,7 @@ def test_rows_are_consistent():
 
 def test_the_python_codec_against_the_shared_vectors():
     """The vectors the ST encoder is checked against (test_motion_fbs.py) hold for the catalogue's codec too."""
-    vectors = json.loads((Path(__file__).parent / "vectors" / "motion_commands.json").read_text())["vectors"]
+    vectors = json.loads((VECTORS / "motion_commands.json").read_text())["vectors"]
     for v in vectors:
         cid, image = int(v["cid"], 16), bytes.fromhex(v["image"])
         assert C.encode(cid, v["count"], **v["fields"]) == image, v["name"]
@@ -90,38 +89,6 @@ def test_a_new_row_is_executed_by_the_emulated_drive(monkeypatch):
     assert 150 * MS <= moving[-1].t_ns - moving[0].t_ns <= 250 * MS
 
 
-def _encoder_program(tmp_path: Path) -> Path:
-    """A program around the regenerated F_LmMotionEncode (with the test's row): the library's image helpers,
-    then the generated function, then a program that encodes on every scan."""
-    src = tmp_path / "enc.st"
-    includes = ["types/can.st", "types/errors.st", "types/lm_types.st", "codecs/le.st", "motion/types.st",
-                "motion/codec.st"]
-    src.write_text("\n".join(f'{{#include "st_lib/{i}"}}' for i in includes) + "\n" + generate.render_codec() + """
-PROGRAM TB_Enc
-  VAR
-    Cid : UINT;
-    Count : USINT;
-    A : DINT;
-    B : DINT;
-    C : DINT;
-    D : DINT;
-    E : DINT;
-    Img : T_LmMotionImage;
-    NBytes : USINT;
-  END_VAR
-  NBytes := F_LmMotionEncode(Cid := Cid, Count := Count, A := A, B := B, C := C, D := D, E := E, Img := Img);
-END_PROGRAM
-
-CONFIGURATION Config0
-  RESOURCE Res0 ON PLC
-    TASK Main(INTERVAL := T#1ms, PRIORITY := 0);
-    PROGRAM Enc WITH Main : TB_Enc;
-  END_RESOURCE
-END_CONFIGURATION
-""")
-    return src
-
-
 @pytest.mark.parametrize("backend", available_backends() or ["none"])
 def test_the_regenerated_st_encoder_encodes_a_new_row(monkeypatch, tmp_path, backend):
     if backend == "none":
@@ -131,7 +98,7 @@ def test_the_regenerated_st_encoder_encodes_a_new_row(monkeypatch, tmp_path, bac
 
     monkeypatch.setitem(C.COMMANDS, NEW_ROW.cid, NEW_ROW)
     assert "224, " not in (generate.REPO / "st_lib/motion/codec_gen.st").read_text()   # the library has no 0E0h
-    plc = Plc(toolchain.build(str(_encoder_program(tmp_path)), backend=backend, root=tmp_path))
+    plc = Plc(toolchain.build(str(encoder_program(tmp_path)), backend=backend, root=tmp_path))
     cases = [(0x0E0, 5, dict(target=-1234, vmax=100, acc=2_000_000_000)),
              (C.VAI16_GO_TO_POS, 7, dict(target=32767, vmax=1, acc=2, dec=3)),
              (C.TIME_CURVE_OFFSET_TIME_AMP, 3, dict(curve_id=2, offset=-50000, curve_time=12345, amplitude=-1000))]

@@ -3,7 +3,6 @@ ranges, stringlets from the string UPID itself, its tree-identity UPIDs, and wha
 
 from __future__ import annotations
 
-from pathlib import Path
 
 import pytest
 
@@ -14,8 +13,9 @@ from linmot_st.pvl import demo
 from linmot_st.pvl.drive_types import B1100, E1100, drive_type, drive_type_of_tree_file
 from linmot_st.pvl.model import Parameter, ParameterObject, PvlFile
 from linmot_st.pvl.to_st import read_st
+from repo_paths import EXAMPLES
 
-EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "b1100_axis.pvl"
+EXAMPLE = EXAMPLES / "b1100_axis.pvl"
 
 
 def test_series_from_the_tree_file_name():

@@ -7,8 +7,8 @@ import sys
 from pathlib import Path
 
 from linmot_st.cli import main
+from repo_paths import EXAMPLES
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 
 def test_show_two_axes(capsys):

@@ -4,14 +4,13 @@ from __future__ import annotations
 
 import json
 import struct
-from pathlib import Path
 
 import pytest
 
 from linmot_st.pvl import CtEntryBlock, CurveInfo, codec, parse_pvl, write_pvl, PvlFile, Curve
 from linmot_st.pvl.drive_types import drive_type
+from repo_paths import VECTORS
 
-VECTORS = Path(__file__).resolve().parent / "vectors"
 CURVES = json.loads((VECTORS / "curve_info.json").read_text())["curves"]
 STRINGS = json.loads((VECTORS / "stringlets.json").read_text())["strings"]
 

@@ -3,7 +3,6 @@ the text details the reader accepts (CRLF, trailing blanks, Latin-1, commas in t
 
 from __future__ import annotations
 
-from pathlib import Path
 
 import pytest
 
@@ -11,7 +10,6 @@ from linmot_st.pvl import (CommandTableEntry, Curve, Parameter, ParameterObject,
                            parse_pvl, save_pvl, write_pvl)
 from linmot_st.pvl import demo
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 
 @pytest.mark.parametrize("name", sorted(demo.EXAMPLES))

@@ -3,14 +3,13 @@ shipped example files are what linmot_st.pvl.demo builds."""
 
 from __future__ import annotations
 
-from pathlib import Path
 
 import pytest
 
 from linmot_st.pvl import LAYERS, TreeIdentity, load_pvl, parse_pvl, write_pvl
 from linmot_st.pvl import codec, demo
+from repo_paths import REPO, EXAMPLES
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 # Figure 14 as printed in the older document (001, LinMot Talk1100): trailing blanks after most lines
 SEED_CURVE_001 = """@FileType,PVL \n@FormatVersion,1 \n \n@StartObject,Curve \n@CurveName,Example_Curve \n\
@@ -150,7 +149,7 @@ def test_two_axes_parameters_exist_on_the_emulated_drive():
     # the demo commissions the emulated drive: every UPID of the example must be a writable parameter there,
     # with its value inside the drive's limits
     import csv
-    table = Path(__file__).resolve().parents[1] / "harness/linmot_st/emulator/data/e1100_parameters.csv"
+    table = REPO / "harness/linmot_st/emulator/data/e1100_parameters.csv"
     assert table.exists(), f"{table}: the emulator's parameter table is missing"
     rows = csv.DictReader(ln for ln in table.read_text().splitlines() if not ln.startswith("#"))
     drive = {int(r["upid"], 16): r for r in rows}

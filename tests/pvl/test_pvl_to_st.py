@@ -6,7 +6,6 @@ what the generator writes for examples/two_axes.pvl."""
 
 from __future__ import annotations
 
-from pathlib import Path
 
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -16,8 +15,8 @@ from linmot_st.pvl import dataset as dsf
 from linmot_st.pvl import Curve, PvlFile, load_pvl
 from linmot_st.pvl.to_st import DEFAULT_TYPE, read_st, to_st
 from test_pvl_properties import pvl_files
+from repo_paths import REPO
 
-REPO = Path(__file__).resolve().parents[1]
 EXAMPLES = REPO / "examples"
 PLC_DATASET = REPO / "plc_project" / "dataset.st"
 

@@ -4,12 +4,10 @@ put the same frames on the bus at the same times for the same scenario (differen
 from __future__ import annotations
 
 import json
-import sys
 from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
 from stbench import VECTORS, Bench, available_backends, bench_build  # noqa: E402
 
 from linmot_st.emulator import build_entry  # noqa: E402

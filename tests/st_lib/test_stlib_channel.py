@@ -4,12 +4,9 @@ sequencer without wasted scans, and B1100 parameter access."""
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
 from stbench import Bench, exchanges  # noqa: E402
 
 from linmot_st.bus import Frame  # noqa: E402

@@ -5,12 +5,9 @@ from __future__ import annotations
 
 import json
 import struct
-import sys
-from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
 from stbench import CODECS, VECTORS, bench_build  # noqa: E402
 
 from linmot_st.protocol.errors import BY_NAME  # noqa: E402

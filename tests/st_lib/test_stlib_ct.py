@@ -2,24 +2,16 @@
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
-from stbench import Bench, exchanges  # noqa: E402
+from stbench import exchanges  # noqa: E402
 
 from linmot_st.emulator import build_entry  # noqa: E402
 from linmot_st.protocol.errors import BY_NAME  # noqa: E402
 
 E = {name: e.value for name, e in BY_NAME.items()}
 PARS = bytes(range(0x10, 0x30))
-
-
-@pytest.fixture
-def b():
-    return Bench(nodes=1)
 
 
 def test_write_then_read_back(b):

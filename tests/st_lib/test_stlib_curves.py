@@ -5,13 +5,10 @@ from __future__ import annotations
 
 import json
 import struct
-import sys
-from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
-from stbench import VECTORS, Bench, exchanges  # noqa: E402
+from stbench import VECTORS, exchanges  # noqa: E402
 
 from linmot_st.protocol.errors import BY_NAME  # noqa: E402
 
@@ -29,11 +26,6 @@ def make_curve(curve_id: int, n: int, name: str = "PLC curve") -> tuple[list[int
     setpoints = [(-1) ** k * (k * 7919 % 100_000) for k in range(n)]
     info = struct.pack("<HHHH22sHIHHH28s", 70, 3, n, 4, name.encode(), curve_id, 100 * n, 0x1A, 0x05, 0, b"")
     return list(info), setpoints
-
-
-@pytest.fixture
-def b():
-    return Bench(nodes=1)
 
 
 def add(b, curve_id, info, setpoints, data_size=None, two_byte=False, fb="CA"):

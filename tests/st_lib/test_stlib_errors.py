@@ -4,10 +4,7 @@ checks the numbers the compiled library actually holds."""
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
 from stbench import bench_build  # noqa: E402
 
 from linmot_st.protocol import errors, generate  # noqa: E402

@@ -5,12 +5,9 @@ fails after the MC software was stopped, a UPID list longer than the PLC holds."
 from __future__ import annotations
 
 import json
-import sys
-from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
 from stbench import MAILBOX, VECTORS, Bench  # noqa: E402
 
 from linmot_st.bus import Frame  # noqa: E402

@@ -6,10 +6,7 @@ object whose earlier write timed out is therefore read back (docs/st-library.md 
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
 from stbench import Bench, exchanges  # noqa: E402
 
 from linmot_st.protocol.errors import BY_NAME  # noqa: E402

@@ -4,13 +4,10 @@ errors, strings as stringlets, set-to-default, UPID lists, firmware layers."""
 from __future__ import annotations
 
 import json
-import sys
-from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
-from stbench import VECTORS, Bench, exchanges  # noqa: E402
+from stbench import VECTORS, exchanges  # noqa: E402
 
 from linmot_st.protocol.errors import BY_NAME  # noqa: E402
 
@@ -20,11 +17,6 @@ ABORT_READ_ONLY, ABORT_RANGE, ABORT_NO_OBJECT, ABORT_UNSUPPORTED = 0x06010002, 0
 LIVE = 0x1005          # Max Current Limit: live UINT16 100..2500, default 2000
 NON_LIVE = 0x101A      # Motor Supply Voltage Error Low Level: non-live UINT16 0..1000, default 180
 READ_ONLY = 0x1B62     # State Var: a variable
-
-
-@pytest.fixture
-def b():
-    return Bench(nodes=1)
 
 
 def test_write_then_read_back_every_memory(b):

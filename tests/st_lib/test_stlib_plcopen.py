@@ -5,14 +5,11 @@ Execute fell before the end, re-trigger while Busy ignored, outputs reset on the
 from __future__ import annotations
 
 import json
-import sys
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Callable
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
 from plcopen_checks import (assert_exclusive, check_done_held, check_one_scan_pulse,  # noqa: E402
                             check_reset_on_falling_edge, check_rising_edge_after_the_pulse, check_toggled_execute,
                             outputs, requests, run_recording)

@@ -5,12 +5,9 @@ second channel on a node another channel of the same mailbox owns (docs/st-libra
 from __future__ import annotations
 
 import struct
-import sys
-from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
 from stbench import Bench  # noqa: E402
 
 from linmot_st.protocol.errors import BY_NAME  # noqa: E402

@@ -5,9 +5,8 @@ from __future__ import annotations
 
 import json
 from functools import lru_cache
-from pathlib import Path
 
-VECTORS = Path(__file__).parent / "vectors"
+from repo_paths import VECTORS
 
 
 @lru_cache(maxsize=None)

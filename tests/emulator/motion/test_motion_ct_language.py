@@ -6,8 +6,6 @@ catalogue does."""
 from __future__ import annotations
 
 import struct
-import sys
-from pathlib import Path
 
 import pytest
 
@@ -19,9 +17,8 @@ from linmot_st.protocol import words as W
 from linmot_st.protocol.commands import ct_language as CTL
 from linmot_st.protocol.upids import P_PREDEF_VMAX, V_ACTUAL_POSITION, V_CT_VAR1, V_CT_VAR2
 
-sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
 from stbench import available_backends  # noqa: E402
-from test_protocol_catalogue import _encoder_program  # noqa: E402  (the encoder program around codec_gen)
+from catalogue_programs import encoder_program  # noqa: E402  (the encoder program around codec_gen)
 
 MS = 1_000_000
 MM = 10_000
@@ -463,7 +460,7 @@ def test_the_st_encoder_encodes_every_row_of_the_group_as_the_catalogue(tmp_path
     from linmot_st import toolchain
     from linmot_st.plc import Plc
 
-    plc = Plc(toolchain.build(str(_encoder_program(tmp_path)), backend=backend, root=tmp_path))
+    plc = Plc(toolchain.build(str(encoder_program(tmp_path)), backend=backend, root=tmp_path))
     for count, cid in enumerate(GROUP):
         fields = _example(cid)
         expected = C.encode(cid, count & 0xF, **fields)

@@ -7,7 +7,6 @@ from the setpoints (linear between them), not taken from the emulator.
 
 from __future__ import annotations
 
-from pathlib import Path
 
 import pytest
 
@@ -15,10 +14,11 @@ from linmot_st.emulator import Curve, E1100Drive, DriveTimings, load_profile
 from linmot_st.protocol import commands as C
 from linmot_st.emulator.testing import MotionLink
 from linmot_st.pvl import load_pvl
+from repo_paths import EXAMPLES
 
 MS = 1_000_000
 MM = 10_000
-PVL = Path(__file__).resolve().parents[1] / "examples" / "two_axes.pvl"
+PVL = EXAMPLES / "two_axes.pvl"
 
 
 def pvl_curves() -> dict[int, Curve]:

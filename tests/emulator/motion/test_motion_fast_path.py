@@ -8,8 +8,6 @@ Compared exactly (==), float for float."""
 from __future__ import annotations
 
 import random
-import struct
-from pathlib import Path
 
 import pytest
 
@@ -20,10 +18,11 @@ from linmot_st.protocol import commands as C
 from linmot_st.emulator.linmot.motion.setpoints import CurvePlan, Hold, StopPlan, VaPlan
 from linmot_st.emulator.testing import MotionLink
 from linmot_st.pvl import load_pvl
+from repo_paths import EXAMPLES
 
 MS = 1_000_000
 MM = 10_000
-PVL = Path(__file__).resolve().parents[1] / "examples" / "two_axes.pvl"
+PVL = EXAMPLES / "two_axes.pvl"
 
 
 # ---- the bench scenario --------------------------------------------------------------------------------

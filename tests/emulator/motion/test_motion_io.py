@@ -427,12 +427,9 @@ def test_vai_go_to_analog_pos_can_follow_the_input():
 def test_the_st_encoder_encodes_every_row_as_the_catalogue(tmp_path):
     """F_LmMotionEncode (st_lib/motion/codec_gen.st, generated from the catalogue) against the Python codec for
     every row of this part, with values at the ends of each field's type."""
-    import sys
-    from pathlib import Path
 
-    sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
     from stbench import available_backends
-    from test_protocol_catalogue import _encoder_program
+    from catalogue_programs import encoder_program
 
     from linmot_st import toolchain
     from linmot_st.plc import Plc
@@ -440,7 +437,7 @@ def test_the_st_encoder_encodes_every_row_as_the_catalogue(tmp_path):
     backends = available_backends()
     if not backends:
         pytest.skip("no ST backend")
-    plc = Plc(toolchain.build(str(_encoder_program(tmp_path)), backend=backends[0], root=tmp_path))
+    plc = Plc(toolchain.build(str(encoder_program(tmp_path)), backend=backends[0], root=tmp_path))
     extremes = {"INT": (-32768, 32767), "UINT": (65535, 1), "DINT": (-2_000_000_000, 2_000_000_000),
                 "UDINT": (2_147_483_647, 7)}          # the encoder takes DINT inputs
     for k, cid in enumerate(ROWS):

@@ -142,14 +142,6 @@ def test_input_script_lines():
             apply_line(io, bad, 5_000_000_000)
 
 
-@pytest.fixture(scope="module")
-def station():
-    from linmot_st import resources
-    from linmot_st.plctest.project import Project
-
-    return Project(root=resources.CHECKOUT / "examples" / "user_project").build(backend="builtin")
-
-
 def test_the_rig_sets_and_reads_drive_inputs(station):
     """The pytest plugin's rig (examples/user_project's station): an input set at a rig time changes then, in
     step with the PLC's scans, and is recorded beside the drive's trajectory."""

@@ -19,15 +19,14 @@ from linmot_st.emulator import DriveTimings, E1100Drive, build_entry, load_profi
 from linmot_st.emulator.testing import MotionLink
 from linmot_st.protocol import commands as C
 from linmot_st.protocol import words as W
-from linmot_st.protocol.commands import vai_variants as VV_ROWS
-from linmot_st.protocol.commands import system_mc as SYS_ROWS
+from catalogue_programs import NEW_ROWS
+from repo_paths import VECTORS
 
 MS = 1_000_000
 MM = 10_000           # pu per mm
 CYCLE = MS
 
-# the rows this issue adds (their modules' ID constants)
-NEW_ROWS = sorted({v for m in (VV_ROWS, SYS_ROWS) for k, v in vars(m).items() if k.isupper() and isinstance(v, int)})
+# the rows this issue adds: catalogue_programs.NEW_ROWS
 
 
 def homed_link(defaults: dict | None = None) -> MotionLink:
@@ -106,9 +105,8 @@ def test_every_new_row_is_accepted_by_the_drive(cid):
 def test_the_shared_vectors_of_the_new_rows():
     """tests/vectors/motion_commands_vai.json: images written by hand from the layouts of [MC] 4.3."""
     import json
-    from pathlib import Path
 
-    data = json.loads((Path(__file__).parent / "vectors" / "motion_commands_vai.json").read_text())
+    data = json.loads((VECTORS / "motion_commands_vai.json").read_text())
     cids = set()
     for v in data["vectors"]:
         cid, image = int(v["cid"], 16), bytes.fromhex(v["image"])

@@ -12,8 +12,8 @@ from pathlib import Path
 import pytest
 
 from linmot_st.cli import main
+from repo_paths import EXAMPLES
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 B1100_FILE, E1100_FILE = EXAMPLES / "b1100_axis.pvl", EXAMPLES / "two_axes.pvl"
 
 

@@ -4,7 +4,6 @@ makes each node's drive)."""
 
 from __future__ import annotations
 
-from pathlib import Path
 
 import pytest
 
@@ -13,8 +12,9 @@ from linmot_st.commission.testing import commission, example
 from linmot_st.emulator import E1100Drive
 from linmot_st.pvl import load_pvl
 from linmot_st.pvl.dataset import from_pvl
+from repo_paths import EXAMPLES
 
-B1100_FILE = Path(__file__).resolve().parents[1] / "examples" / "b1100_axis.pvl"
+B1100_FILE = EXAMPLES / "b1100_axis.pvl"
 
 
 def _source(pvl, name):

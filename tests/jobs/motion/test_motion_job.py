@@ -4,7 +4,6 @@ then moves them through its motion program; every step is checked against the PV
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import pytest
 
@@ -16,8 +15,9 @@ from linmot_st.motion.check import check_motion
 from linmot_st.motion.job import run_job
 from linmot_st.motion.plan import CURVE_DEMAND_TOLERANCE_MM, plan
 from linmot_st.pvl import load_pvl
+from repo_paths import EXAMPLES
 
-EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "two_axes.pvl"
+EXAMPLE = EXAMPLES / "two_axes.pvl"
 MS = 1_000_000
 
 

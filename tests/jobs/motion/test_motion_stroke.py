@@ -8,7 +8,6 @@ the emulated slider homed on its negative stop at 0 mm."""
 
 from __future__ import annotations
 
-from pathlib import Path
 
 import pytest
 
@@ -20,9 +19,11 @@ from linmot_st.motion.check import check_motion
 from linmot_st.motion.job import run_job
 from linmot_st.motion.plan import plan
 from linmot_st.pvl import load_pvl, parse_pvl
+import repo_paths
+from repo_paths import EXAMPLES
 
-DATA = Path(__file__).resolve().parent / "data" / "curve_below_home.pvl"
-EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "two_axes.pvl"
+DATA = repo_paths.DATA / "curve_below_home.pvl"
+EXAMPLE = EXAMPLES / "two_axes.pvl"
 
 
 def _variant(replace: dict[str, str], add: str = ""):

@@ -5,10 +5,7 @@ run's late "written", delivered out of order, for its own answer (docs/st-librar
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).parent))
 from test_commission_plcopen import INSTANCE, ComBench  # noqa: E402
 
 from linmot_st.protocol.errors import BY_NAME  # noqa: E402

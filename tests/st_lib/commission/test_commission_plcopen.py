@@ -4,15 +4,12 @@ program's Start (WaitBoot off), Abort its Abort, the options its LiveRam / Flash
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
 
 import pytest
 
 from linmot_st.commission.project import INSTANCE, MAILBOX
 from linmot_st.commission.testing import project_build
 
-sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
 from plcopen_checks import (assert_exclusive, check_rising_edge_after_the_pulse, check_toggled_execute,  # noqa: E402
                             outputs, requests, run_recording)
 

@@ -5,12 +5,11 @@ MatIEC (no FOR loop, every file included by st_lib/linmot.st)."""
 from __future__ import annotations
 
 import re
-from pathlib import Path
 
 from linmot_st.protocol import errors
 from linmot_st.pvl import dataset as dsf
+from repo_paths import REPO
 
-REPO = Path(__file__).resolve().parents[1]
 ST = REPO / "st_lib" / "commission"
 
 

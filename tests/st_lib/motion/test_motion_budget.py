@@ -5,20 +5,19 @@ configuration that cannot fit, with its figures, before anything runs."""
 from __future__ import annotations
 
 import json
-import sys
 
-from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
 from stbench import bench_build  # noqa: E402
 
 from linmot_st.protocol.errors import BY_NAME  # noqa: E402
 from linmot_st.motion.budget import EVENT, SYNC, BudgetInputs, load_at, plan_budget, vectors  # noqa: E402
+import repo_paths  # noqa: E402
+from repo_paths import EXAMPLES, ST_BENCHES  # noqa: E402
 
-VECTORS = json.loads((Path(__file__).parent / "vectors" / "pdo_budget.json").read_text())
-BENCH = Path(__file__).parent / "st_lib" / "budget_testbench.st"
+VECTORS = json.loads((repo_paths.VECTORS / "pdo_budget.json").read_text())
+BENCH = ST_BENCHES / "budget_testbench.st"
 INPUT_OF = {"axes": "AXES", "bitrate": "BITRATE", "share_permille": "SHAREPERMILLE", "tx1_event_ms": "TX1EVENTMS",
             "commands_per_s": "COMMANDSPERS", "refresh_ms": "REFRESHMS", "rx3_bytes": "RX3BYTES",
             "mc_cycle_us": "MCCYCLEUS", "max_interval_100us": "MAXINTERVAL100US"}
@@ -91,7 +90,7 @@ def test_st_refuses_invalid_inputs(st):
 
 
 # ---------------------------------------------------------------- the motion job
-EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "two_axes.pvl"
+EXAMPLE = EXAMPLES / "two_axes.pvl"
 
 
 def test_the_job_refuses_a_configuration_that_cannot_fit(capsys):

@@ -7,12 +7,9 @@ frame."""
 from __future__ import annotations
 
 import struct
-import sys
-from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
 from motionbench import MM, MotionBench  # noqa: E402
 
 from linmot_st.emulator import Curve  # noqa: E402

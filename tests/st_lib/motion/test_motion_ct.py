@@ -4,10 +4,7 @@
 from __future__ import annotations
 
 import struct
-import sys
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
 from stbench import Bench  # noqa: E402
 
 from linmot_st.bus.frame import Frame  # noqa: E402

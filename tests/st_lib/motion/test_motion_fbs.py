@@ -7,14 +7,10 @@ and nothing claimed done that the drive did not do."""
 from __future__ import annotations
 
 import json
-import math
 import struct
-import sys
-from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
 from motionbench import MM, MotionBench  # noqa: E402
 from stbench import VECTORS  # noqa: E402
 
@@ -23,10 +19,11 @@ from linmot_st.emulator import Curve, build_entry  # noqa: E402
 from linmot_st.protocol import commands as C  # noqa: E402
 from linmot_st.protocol.errors import BY_NAME  # noqa: E402
 from linmot_st.pvl import load_pvl  # noqa: E402
+from repo_paths import EXAMPLES
 
 E = {name: e.value for name, e in BY_NAME.items()}
 MS = 1_000_000
-PVL = Path(__file__).resolve().parents[1] / "examples" / "two_axes.pvl"
+PVL = EXAMPLES / "two_axes.pvl"
 MOVE = dict(VELOCITY=1000.0, ACCELERATION=10000.0, DECELERATION=10000.0)    # 1 m/s, 10 m/s^2
 
 

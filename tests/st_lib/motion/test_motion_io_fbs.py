@@ -6,12 +6,9 @@ a capture on X4.5 during a move, a probe ended by AbortTrigger (and 008xh sent),
 from __future__ import annotations
 
 import struct
-import sys
-from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
 from motionbench import MM, MotionBench  # noqa: E402
 
 from linmot_st.protocol.errors import BY_NAME  # noqa: E402

@@ -4,10 +4,7 @@ by FB_LmStartCommandTable (200xh): the trajectory shows N strokes ([MC] 4.3.124.
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
 from motionbench import MM, MotionBench  # noqa: E402
 
 from linmot_st.protocol import commands as C  # noqa: E402

@@ -8,10 +8,7 @@ losses does not."""
 from __future__ import annotations
 
 import math
-import sys
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
 from motionbench import MM, MotionBench  # noqa: E402
 
 from linmot_st.bus.faults import match_id  # noqa: E402

@@ -7,14 +7,11 @@ homing and reset)."""
 
 from __future__ import annotations
 
-import sys
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Callable
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
 from motionbench import MotionBench  # noqa: E402
 from plcopen_checks import (assert_exclusive, check_done_held, check_one_scan_pulse,  # noqa: E402
                             check_reset_on_falling_edge, check_rising_edge_after_the_pulse, check_toggled_execute,

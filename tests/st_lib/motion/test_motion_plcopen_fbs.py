@@ -7,12 +7,9 @@ before any frame."""
 from __future__ import annotations
 
 import struct
-import sys
-from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
 from motionbench import MM, MotionBench  # noqa: E402
 
 from linmot_st.protocol import commands as C  # noqa: E402

@@ -5,12 +5,9 @@ Enable falling sends Stop Streaming; a PLC whose SYNC slows down gets the drive'
 from __future__ import annotations
 
 import math
-import sys
-from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
 from motionbench import MotionBench  # noqa: E402
 
 from linmot_st.protocol import words as W

@@ -5,18 +5,15 @@ field), and the hand-written vectors tests/vectors/motion_commands_vai.json."""
 from __future__ import annotations
 
 import json
-import sys
-from pathlib import Path
 
 import pytest
 
 from linmot_st.protocol import commands as C
 
-sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
-sys.path.insert(0, str(Path(__file__).parent))
 from stbench import available_backends  # noqa: E402
-from test_motion_vai_variants import NEW_ROWS  # noqa: E402
-from test_protocol_catalogue import _encoder_program  # noqa: E402
+from catalogue_programs import NEW_ROWS  # noqa: E402
+from catalogue_programs import encoder_program  # noqa: E402
+from repo_paths import VECTORS
 
 # the extremes of each IEC type that the encoder's DINT inputs can carry
 EXTREMES = {"INT": (-32768, 32767), "UINT": (0, 65535), "DINT": (-2**31, 2**31 - 1), "UDINT": (0, 2**31 - 1)}
@@ -29,7 +26,7 @@ def _cases() -> list[tuple[int, int, dict]]:
         for pick in (0, 1):
             cases.append((cid, (i + pick) % 16, {f.name: EXTREMES[f.type][(pick + k) % 2] for k, f in
                                                   enumerate(fields)}))
-    vectors = json.loads((Path(__file__).parent / "vectors" / "motion_commands_vai.json").read_text())["vectors"]
+    vectors = json.loads((VECTORS / "motion_commands_vai.json").read_text())["vectors"]
     cases += [(int(v["cid"], 16), v["count"], v["fields"]) for v in vectors]
     return cases
 
@@ -41,7 +38,7 @@ def test_the_library_encoder_encodes_every_new_row(tmp_path, backend):
     from linmot_st import toolchain
     from linmot_st.plc import Plc
 
-    plc = Plc(toolchain.build(str(_encoder_program(tmp_path)), backend=backend, root=tmp_path))
+    plc = Plc(toolchain.build(str(encoder_program(tmp_path)), backend=backend, root=tmp_path))
     for cid, count, fields in _cases():
         expected = C.encode(cid, count, **fields)
         plc["ENC.CID"], plc["ENC.COUNT"] = cid, count

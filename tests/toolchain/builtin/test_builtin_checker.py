@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 
 from linmot_st.toolchain.builtin import BuiltinCompileError, check_text, compile_to_c
+from repo_paths import REPO, CONFORMANCE_CASES
 
 DIAG = re.compile(r"^(?P<file>[^:]+):(?P<line>\d+):(?P<col>\d+): error: (?P<msg>.+)$")
 
@@ -267,7 +268,7 @@ def test_code_generation_pragmas_are_matiecs_spelling_in_any_case():
 
 
 def test_the_library_passes_the_checker():
-    root = Path(__file__).resolve().parents[1]
+    root = REPO
     from linmot_st.toolchain.builtin.loader import load
     from linmot_st.toolchain.builtin.checker import Checker
     elements, files, names = load(root / "st_lib" / "linmot.st", root)
@@ -283,7 +284,7 @@ def test_mutated_sources_never_crash_the_compiler():
     from linmot_st.toolchain.builtin.codegen import CodeGen
     from linmot_st.toolchain.builtin.parser import parse
     rng = random.Random(61131)
-    cases = sorted((Path(__file__).parent / "conformance" / "cases").glob("*.st"))
+    cases = sorted((CONFORMANCE_CASES).glob("*.st"))
     assert cases
     for path in cases:
         toks = re.findall(r"\w+|[^\w\s]+|\s+", path.read_text())
