@@ -15,7 +15,6 @@ import pytest
 from linmot_st import resources
 from linmot_st.emulator import DriveTimings, E1100Drive, load_profile
 from linmot_st.plctest import FbFailed, RealTimeRig, Rig, RigTimeout
-from linmot_st.plctest.project import Project
 from linmot_st.plctest.rig import ConditionError, condition
 
 EXAMPLE = resources.CHECKOUT / "examples" / "user_project"

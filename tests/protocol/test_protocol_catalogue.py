@@ -15,9 +15,9 @@ from linmot_st.protocol import commands as C
 from linmot_st.protocol import generate
 from linmot_st.protocol import words as W
 
-from stbench import available_backends  # noqa: E402
-from catalogue_programs import encoder_program  # noqa: E402
-from repo_paths import VECTORS  # noqa: E402
+from stbench import available_backends
+from catalogue_programs import encoder_program
+from repo_paths import VECTORS
 
 MS = 1_000_000
 MM = 10_000

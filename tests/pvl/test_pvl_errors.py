@@ -8,7 +8,7 @@ from dataclasses import replace
 
 import pytest
 
-from linmot_st.pvl import (CommandTableEntry, Curve, Parameter, ParameterObject, PvlError, PvlFile,
+from linmot_st.pvl import (CommandTableEntry, Curve, Parameter, PvlError, PvlFile,
                            parse_pvl, write_pvl)
 from linmot_st.pvl import codec, demo
 

@@ -8,9 +8,9 @@ from pathlib import Path
 
 import pytest
 
-from stbench import VECTORS, Bench, available_backends, bench_build  # noqa: E402
+from stbench import VECTORS, Bench, available_backends, bench_build
 
-from linmot_st.emulator import build_entry  # noqa: E402
+from linmot_st.emulator import build_entry
 
 SEED = json.loads((VECTORS / "curve_info.json").read_text())["curves"][0]
 

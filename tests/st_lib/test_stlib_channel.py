@@ -7,10 +7,10 @@ from __future__ import annotations
 
 import pytest
 
-from stbench import Bench, exchanges  # noqa: E402
+from stbench import Bench, exchanges
 
-from linmot_st.bus import Frame  # noqa: E402
-from linmot_st.protocol.errors import BY_NAME  # noqa: E402
+from linmot_st.bus import Frame
+from linmot_st.protocol.errors import BY_NAME
 
 E = {name: e.value for name, e in BY_NAME.items()}
 LIVE = 0x1005
@@ -195,7 +195,7 @@ def test_queue_timeout_reports_channel_busy():
     b.step(1)
     r = b.fb("RD").run(UPID=LIVE)
     assert r.error and r.error_id == E["ChannelBusy"] and 10 <= r.scans <= 12
-    at = finish(b, "CA")
+    finish(b, "CA")
     assert b.fb("CA")["DONE"]
     assert b.fb("RD").run(UPID=LIVE).done        # its abandoned ticket does not block the queue
 
@@ -240,7 +240,7 @@ def test_drive_reboot_during_a_transfer():
     b.fb("CA").start(CURVEID=4, INFO=info, DATASIZE=4 * n)
     b.step(20)
     b.bus.reset_node("drive1", b.plc.time_ns)
-    at = finish(b, "CA")
+    finish(b, "CA")
     assert b.fb("CA")["ERRORID"] == E["DriveRebooted"]
     assert b["AX1.BOOTCOUNT"] == 2
     b.fb("CA")["EXECUTE"] = False

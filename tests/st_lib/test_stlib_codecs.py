@@ -8,9 +8,9 @@ import struct
 
 import pytest
 
-from stbench import CODECS, VECTORS, bench_build  # noqa: E402
+from stbench import CODECS, VECTORS, bench_build
 
-from linmot_st.protocol.errors import BY_NAME  # noqa: E402
+from linmot_st.protocol.errors import BY_NAME
 
 E = {name: e.value for name, e in BY_NAME.items()}
 STRINGLETS = json.loads((VECTORS / "stringlets.json").read_text())["strings"]

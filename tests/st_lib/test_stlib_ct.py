@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import pytest
 
-from stbench import exchanges  # noqa: E402
+from stbench import exchanges
 
-from linmot_st.emulator import build_entry  # noqa: E402
-from linmot_st.protocol.errors import BY_NAME  # noqa: E402
+from linmot_st.emulator import build_entry
+from linmot_st.protocol.errors import BY_NAME
 
 E = {name: e.value for name, e in BY_NAME.items()}
 PARS = bytes(range(0x10, 0x30))

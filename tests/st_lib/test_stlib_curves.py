@@ -8,9 +8,9 @@ import struct
 
 import pytest
 
-from stbench import VECTORS, exchanges  # noqa: E402
+from stbench import VECTORS, exchanges
 
-from linmot_st.protocol.errors import BY_NAME  # noqa: E402
+from linmot_st.protocol.errors import BY_NAME
 
 E = {name: e.value for name, e in BY_NAME.items()}
 CURVES = json.loads((VECTORS / "curve_info.json").read_text())["curves"]

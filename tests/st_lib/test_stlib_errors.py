@@ -5,9 +5,9 @@ checks the numbers the compiled library actually holds."""
 from __future__ import annotations
 
 
-from stbench import bench_build  # noqa: E402
+from stbench import bench_build
 
-from linmot_st.protocol import errors, generate  # noqa: E402
+from linmot_st.protocol import errors, generate
 
 
 def test_st_file_holds_every_number():

@@ -8,10 +8,10 @@ import json
 
 import pytest
 
-from stbench import MAILBOX, VECTORS, Bench  # noqa: E402
+from stbench import MAILBOX, VECTORS, Bench
 
-from linmot_st.bus import Frame  # noqa: E402
-from linmot_st.protocol.errors import BY_NAME  # noqa: E402
+from linmot_st.bus import Frame
+from linmot_st.protocol.errors import BY_NAME
 
 E = {name: e.value for name, e in BY_NAME.items()}
 MS = 1_000_000

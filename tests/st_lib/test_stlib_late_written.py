@@ -7,9 +7,9 @@ object whose earlier write timed out is therefore read back (docs/st-library.md 
 from __future__ import annotations
 
 
-from stbench import Bench, exchanges  # noqa: E402
+from stbench import Bench, exchanges
 
-from linmot_st.protocol.errors import BY_NAME  # noqa: E402
+from linmot_st.protocol.errors import BY_NAME
 
 E = {name: e.value for name, e in BY_NAME.items()}
 MS, US = 1_000_000, 1_000

@@ -8,9 +8,9 @@ import struct
 
 import pytest
 
-from stbench import Bench  # noqa: E402
+from stbench import Bench
 
-from linmot_st.protocol.errors import BY_NAME  # noqa: E402
+from linmot_st.protocol.errors import BY_NAME
 
 E = {name: e.value for name, e in BY_NAME.items()}
 MS = 1_000_000

@@ -36,9 +36,9 @@ def _program() -> str:
     lines = []
     for i, (name, src, t) in enumerate(CONVERSIONS, 1):
         lines.append(f"    {i}: r_{t} := {name}({'x' if src == 'LREAL' else 'xr'});")
-    for i, (name, _src, t) in enumerate(TRUNCS, len(CONVERSIONS) + 1):
+    for i, (_name, _src, t) in enumerate(TRUNCS, len(CONVERSIONS) + 1):
         lines.append(f"    {i}: r_{t} := TRUNC(x);")
-    for i, (name, op, t) in enumerate(SHIFTS, len(CONVERSIONS) + len(TRUNCS) + 1):
+    for i, (_name, op, t) in enumerate(SHIFTS, len(CONVERSIONS) + len(TRUNCS) + 1):
         lines.append(f"    {i}: r_{t} := {op}(v_{t}, k);")
     return "\n".join([
         "PROGRAM p_undef",

@@ -17,8 +17,8 @@ from linmot_st.protocol import words as W
 from linmot_st.protocol.commands import ct_language as CTL
 from linmot_st.protocol.upids import P_PREDEF_VMAX, V_ACTUAL_POSITION, V_CT_VAR1, V_CT_VAR2
 
-from stbench import available_backends  # noqa: E402
-from catalogue_programs import encoder_program  # noqa: E402  (the encoder program around codec_gen)
+from stbench import available_backends
+from catalogue_programs import encoder_program  # (the encoder program around codec_gen)
 
 MS = 1_000_000
 MM = 10_000

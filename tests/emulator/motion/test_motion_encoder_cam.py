@@ -118,7 +118,7 @@ def test_triggered_cam_starts_after_its_delay_counts_on_every_edge():
     link.advance(100 * MS)
     assert mc.dem_p == here                                            # no edge yet: no motion
     starts = []
-    for k in range(2):                                                 # the event handler re-arms: two parts
+    for _ in range(2):                                                 # the event handler re-arms: two parts
         edge = link.t + 300_000                                        # between two MC cycles
         io.set_input("X4.6", 1, edge)
         io.set_input("X4.6", 0, edge + 5 * MS)

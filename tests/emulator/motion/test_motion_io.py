@@ -169,7 +169,7 @@ def test_inhibited_mode_debounces_a_bouncing_contact():
 
 def test_inhibited_mode_takes_the_level_when_the_inhibit_time_ends():
     link = homed_link(**{"x170C": 2, "x170D": 50, "x170E": 50})
-    mc, io = link.drive.mc, link.drive.io
+    io = link.drive.io
     link.command(0x02C, target=30 * MM)               # Predef VAI Go To Pos On Falling Trigger Event
     link.advance(5 * MS)
     t = link.t + 10 * MS

@@ -14,7 +14,6 @@ import canopen
 import pytest
 
 from linmot_st.emulator import DriveIO, DriveTimings, E1100Drive, load_profile
-from linmot_st.emulator.cia301.eds import SHIPPED_EDS
 from linmot_st.emulator.linmot.io_script import ScriptError, apply_line, apply_script
 from test_motion_realtime import _map, _od_with_pdo_description, _wait
 

@@ -177,7 +177,7 @@ def test_setpoints_faster_than_they_play_overflow_the_buffer():
     mc = link.drive.mc
     start, t_first = stream(link, C.PV_STREAM, 4 * MS, 2)
     fields = _fields(C.PV_STREAM)
-    for k in range(10):
+    for _ in range(10):
         frames = link.command_frames(C.PV_STREAM, **fields(start, 0.0, 0.0))
         link.send(frames[0], MS // 2)
         link.send(frames[1])

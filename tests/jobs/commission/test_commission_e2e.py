@@ -18,7 +18,7 @@ from linmot_st.pvl.dataset import INFO_WORDS, PREFLIGHT_EXCHANGES
 from linmot_st.commission.testing import EXAMPLE, commission, example
 
 
-from linmot_st.toolchain.testing import BACKEND_PARAMS  # noqa: E402
+from linmot_st.toolchain.testing import BACKEND_PARAMS
 
 PVL = example()
 CURVE_EXCHANGES = 1 + sum(1 + INFO_WORDS + len(c.setpoints) for c in PVL.curves)   # 41h, then 50h, 54h x 18, 53h x N

@@ -6,9 +6,9 @@ run's late "written", delivered out of order, for its own answer (docs/st-librar
 from __future__ import annotations
 
 
-from test_commission_plcopen import INSTANCE, ComBench  # noqa: E402
+from test_commission_plcopen import INSTANCE, ComBench
 
-from linmot_st.protocol.errors import BY_NAME  # noqa: E402
+from linmot_st.protocol.errors import BY_NAME
 
 E = {name: e.value for name, e in BY_NAME.items()}
 MS, US = 1_000_000, 1_000

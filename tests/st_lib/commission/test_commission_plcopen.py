@@ -10,7 +10,7 @@ import pytest
 from linmot_st.commission.project import INSTANCE, MAILBOX
 from linmot_st.commission.testing import project_build
 
-from plcopen_checks import (assert_exclusive, check_rising_edge_after_the_pulse, check_toggled_execute,  # noqa: E402
+from plcopen_checks import (assert_exclusive, check_rising_edge_after_the_pulse, check_toggled_execute,
                             outputs, requests, run_recording)
 
 

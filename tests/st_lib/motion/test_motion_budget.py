@@ -9,12 +9,12 @@ import json
 
 import pytest
 
-from stbench import bench_build  # noqa: E402
+from stbench import bench_build
 
-from linmot_st.protocol.errors import BY_NAME  # noqa: E402
-from linmot_st.motion.budget import EVENT, SYNC, BudgetInputs, load_at, plan_budget, vectors  # noqa: E402
-import repo_paths  # noqa: E402
-from repo_paths import EXAMPLES, ST_BENCHES  # noqa: E402
+from linmot_st.protocol.errors import BY_NAME
+from linmot_st.motion.budget import EVENT, SYNC, BudgetInputs, load_at, plan_budget, vectors
+import repo_paths
+from repo_paths import EXAMPLES, ST_BENCHES
 
 VECTORS = json.loads((repo_paths.VECTORS / "pdo_budget.json").read_text())
 BENCH = ST_BENCHES / "budget_testbench.st"

@@ -11,14 +11,14 @@ import struct
 
 import pytest
 
-from motionbench import MM, MotionBench  # noqa: E402
-from stbench import VECTORS  # noqa: E402
+from motionbench import MM, MotionBench
+from stbench import VECTORS
 
-from linmot_st.bus import Frame  # noqa: E402
-from linmot_st.emulator import Curve, build_entry  # noqa: E402
-from linmot_st.protocol import commands as C  # noqa: E402
-from linmot_st.protocol.errors import BY_NAME  # noqa: E402
-from linmot_st.pvl import load_pvl  # noqa: E402
+from linmot_st.bus import Frame
+from linmot_st.emulator import Curve, build_entry
+from linmot_st.protocol import commands as C
+from linmot_st.protocol.errors import BY_NAME
+from linmot_st.pvl import load_pvl
 from repo_paths import EXAMPLES
 
 E = {name: e.value for name, e in BY_NAME.items()}

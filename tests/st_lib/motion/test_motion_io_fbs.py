@@ -9,9 +9,9 @@ import struct
 
 import pytest
 
-from motionbench import MM, MotionBench  # noqa: E402
+from motionbench import MM, MotionBench
 
-from linmot_st.protocol.errors import BY_NAME  # noqa: E402
+from linmot_st.protocol.errors import BY_NAME
 
 E = {name: e.value for name, e in BY_NAME.items()}
 MS = 1_000_000

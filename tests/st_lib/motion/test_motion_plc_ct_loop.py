@@ -5,9 +5,9 @@ by FB_LmStartCommandTable (200xh): the trajectory shows N strokes ([MC] 4.3.124.
 from __future__ import annotations
 
 
-from motionbench import MM, MotionBench  # noqa: E402
+from motionbench import MM, MotionBench
 
-from linmot_st.protocol import commands as C  # noqa: E402
+from linmot_st.protocol import commands as C
 
 END = 0xFFFF
 VAD = dict(vmax=250_000, acc=500_000, dec=500_000)        # 0.25 m/s, 5 m/s^2

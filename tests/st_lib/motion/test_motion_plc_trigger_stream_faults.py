@@ -9,11 +9,11 @@ from __future__ import annotations
 
 import math
 
-from motionbench import MM, MotionBench  # noqa: E402
+from motionbench import MM, MotionBench
 
-from linmot_st.bus.faults import match_id  # noqa: E402
-from linmot_st.protocol import words as W  # noqa: E402
-from linmot_st.protocol.errors import BY_NAME  # noqa: E402
+from linmot_st.bus.faults import match_id
+from linmot_st.protocol import words as W
+from linmot_st.protocol.errors import BY_NAME
 
 E = {name: e.value for name, e in BY_NAME.items()}
 MS = 1_000_000

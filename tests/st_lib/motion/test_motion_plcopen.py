@@ -12,13 +12,13 @@ from typing import Callable
 
 import pytest
 
-from motionbench import MotionBench  # noqa: E402
-from plcopen_checks import (assert_exclusive, check_done_held, check_one_scan_pulse,  # noqa: E402
+from motionbench import MotionBench
+from plcopen_checks import (assert_exclusive, check_done_held, check_one_scan_pulse,
                             check_reset_on_falling_edge, check_rising_edge_after_the_pulse, check_toggled_execute,
                             outputs, run_recording)
 
-from linmot_st.emulator import Curve, build_entry  # noqa: E402
-from linmot_st.protocol import commands as C  # noqa: E402
+from linmot_st.emulator import Curve, build_entry
+from linmot_st.protocol import commands as C
 
 MS = 1_000_000
 MOVE = dict(VELOCITY=1000.0, ACCELERATION=10000.0, DECELERATION=10000.0)

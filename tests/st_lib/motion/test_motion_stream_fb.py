@@ -8,7 +8,7 @@ import math
 
 import pytest
 
-from motionbench import MotionBench  # noqa: E402
+from motionbench import MotionBench
 
 from linmot_st.protocol import words as W
 

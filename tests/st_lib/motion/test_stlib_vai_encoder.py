@@ -10,9 +10,9 @@ import pytest
 
 from linmot_st.protocol import commands as C
 
-from stbench import available_backends  # noqa: E402
-from catalogue_programs import NEW_ROWS  # noqa: E402
-from catalogue_programs import encoder_program  # noqa: E402
+from stbench import available_backends
+from catalogue_programs import NEW_ROWS
+from catalogue_programs import encoder_program
 from repo_paths import VECTORS
 
 # the extremes of each IEC type that the encoder's DINT inputs can carry

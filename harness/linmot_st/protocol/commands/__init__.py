@@ -49,7 +49,7 @@ def decode(header: int, params: bytes) -> tuple[CommandDef | None, dict]:
     return c, dict(zip(c.field_names, values))
 
 
-def encode(cid: int, count: int = 0, **values) -> bytes:
+def encode(cid: int, count: int = 0, **values: int) -> bytes:
     """Header and parameters of a command, little endian (tests, tools). An ID the catalogue does not know gets
     its header alone (to provoke 0081h)."""
     header = struct.pack("<H", (cid << 4 | count & 0xF) & 0xFFFF)
