@@ -5,12 +5,13 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test st-coverage bench venv clean
+.PHONY: demo test lint st-coverage bench venv clean
 
 # st_lib's coverage comes from the tests of st_lib (a subset: coverage builds of the whole suite would
 # compile every test's program again for little more of st_lib; docs/coverage.md)
-ST_COVERAGE_TESTS := tests/test_stlib_*.py tests/test_motion_fbs.py tests/test_motion_budget.py \
-                     tests/test_commission_st.py
+ST_COVERAGE_TESTS := tests/st_lib/test_stlib_*.py tests/st_lib/motion/test_stlib_*.py \
+                     tests/st_lib/motion/test_motion_fbs.py tests/st_lib/motion/test_motion_budget.py \
+                     tests/st_lib/commission/test_commission_st.py
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -24,10 +25,16 @@ demo: $(STAMP)
 	mkdir -p build
 	$(BIN)/linmot-st motion examples/two_axes.pvl --axes 2 --drive-timings real --report build/report
 
-# st_lib's coverage first, so that the whole suite's summary is the last line CI reads
+# lint first (seconds), then st_lib's coverage, so that the whole suite's summary is the last line CI reads
 test: $(STAMP)
+	$(MAKE) lint
 	$(MAKE) st-coverage
 	$(BIN)/pytest -q -n 2
+
+# ruff (pyproject [tool.ruff]) over the whole tree; mypy over the modules with a typed contract ([tool.mypy])
+lint: $(STAMP)
+	$(BIN)/ruff check .
+	$(BIN)/mypy
 
 # st_lib's line and branch coverage: the table per file, build/st-coverage/{coverage.xml,html/index.html}
 st-coverage: $(STAMP)

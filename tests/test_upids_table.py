@@ -12,8 +12,8 @@ from linmot_st.emulator import load_profile
 from linmot_st.emulator.cia301 import pdo
 from linmot_st.protocol import upids
 from linmot_st.pvl import load_pvl
+from repo_paths import REPO
 
-REPO = Path(__file__).resolve().parents[1]
 DOC = REPO / "docs" / "upids.md"
 ROW = re.compile(r"^\|\s*([0-9A-F]{4})h\s*\|(.*)\|\s*$")
 PVL_FILES = {"two_axes.pvl": REPO / "examples" / "two_axes.pvl",

@@ -12,7 +12,7 @@ Idle scans (`fast_idle`, the default): when the scan at t would receive nothing 
 echo due, no bus event at or before t), the scans up to the next bus event run in one C call
 (Plc.step_idle) with RxCount = 0, ending early after the scan that fills Tx or changes a variable that
 run_until's predicate watches (its `idle_watch`). The bus sees the same frames at the same times as with
-every scan stepped from Python (docs/plc-integration.md section 1.1; tests/test_cosim_idle.py).
+every scan stepped from Python (docs/plc-integration.md section 1.1; tests/cosim/test_cosim_idle.py).
 With `echo` (the default) the mailbox's TxEcho is set and step 2 also puts each SDO request the PLC sent
 (600h..67Fh) back into Rx once its transmission ended on the bus (Echo TRUE), in bus order with the
 received frames: the transmit confirmation of a PLC CAN driver (docs/plc-integration.md section 1).

@@ -119,7 +119,7 @@ def measure_bit_length(n: int = 200_000) -> float:
     return n / (time.perf_counter() - t0)
 
 
-# the echo PLC program (each received frame sent back with Id + 1); tests/test_cosim_plc.py uses it too
+# the echo PLC program (each received frame sent back with Id + 1); tests/cosim/test_cosim_plc.py uses it too
 ECHO_ST = """{#include "st_lib/types/can.st"}
 PROGRAM Echo
   VAR_EXTERNAL

@@ -123,7 +123,7 @@ class SimBus:
         self._length_cache: dict[tuple, int] = {}
         self._stage: dict[str, list[Fault]] = {"queued": [], "start": [], "end": []}
         # nodes' acceptance filters (`rx_filter`) are used; False offers every frame to every node (the
-        # reference the filtered runs are compared with: tests/test_bus_rx_filter.py)
+        # reference the filtered runs are compared with: tests/bus/test_bus_rx_filter.py)
         self._rx_filters = rx_filters      # read when a node is attached
 
     # -- participants -----------------------------------------------------------------------

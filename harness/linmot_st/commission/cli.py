@@ -191,7 +191,7 @@ def prepare_run(args: argparse.Namespace, *, flash: bool = True, reset: bool = T
     from linmot_st.pvl.cli import load_or_report
     from linmot_st.toolchain import CompileError
 
-    from linmot_st.pvl.dataset import DatasetError, from_pvl
+    from linmot_st.pvl.dataset import DatasetError
     from .datasets import Datasets
     from .project import TASK_INTERVAL_NS, build_project, prepare
     from .runner import RunOptions, check_bus_spec
@@ -277,7 +277,6 @@ def write_outputs(args: argparse.Namespace, report, result) -> int:
     """The --trace file and the report folder; 0, or 1 when one cannot be written."""
     from pathlib import Path
 
-    err = sys.stderr
     status = 0
     if args.trace:
         from linmot_st.bus.trace import write_trace

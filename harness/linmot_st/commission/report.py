@@ -242,7 +242,7 @@ class Report:
         what = describe(ax.error_id, ax.abort_code)
         extra = ""
         if ax.fail_kind == "layer" and ax.error_id in (0x0501, 0x0502, 0x0503):
-            src = next((l for l in self._group_of(ax.node_id).dataset.layers if l[0] == ax.fail_item), None)
+            src = next((layer for layer in self._group_of(ax.node_id).dataset.layers if layer[0] == ax.fail_item), None)
             tid, main, sub = ax.drive_layer
             if src:
                 extra = (f"; the drive has tree ID {tid}, version {main}.{sub}, the dataset tree ID {src[1]}, "

@@ -269,7 +269,7 @@ class Sampler(IdlePredicate):
 
     def close(self) -> None:
         """After the run: an axis still in a phase (timeout, PLC fault) ends it at the last scan."""
-        for k, (ax, vs) in enumerate(zip(self.axes, self._vars)):
+        for ax, vs in zip(self.axes, self._vars):
             if ax.phases and not ax.finished and not ax.phases[-1].t1_ns:
                 cur = ax.phases[-1]
                 cur.t1_ns, cur.scan1 = self.plc.time_ns, max(self.scans - 1, cur.scan0)

@@ -4,7 +4,6 @@ interrupted."""
 from __future__ import annotations
 
 import argparse
-import sys
 
 
 def register(subparsers) -> None:

@@ -3,7 +3,7 @@ the TxPDO2 inhibit time (event mode) or SYNC period (SYNC mode) that keeps that 
 
 The Python twin of st_lib/motion/budget.st (FB_LmPdoBudget, which a PLC program calls before motion): the same
 integer arithmetic, cross-checked by the shared vectors tests/vectors/pdo_budget.json (written from this module
-by `python -m linmot_st.motion.budget --write`; tests/test_motion_budget.py runs both against them).
+by `python -m linmot_st.motion.budget --write`; tests/st_lib/motion/test_motion_budget.py runs both against them).
 
 What is counted, per axis and second (docs/bus.md, "The process-data budget"), every frame at its worst-case
 length with stuff bits (linmot_st.bus.bits.max_bus_bits: 135 bits for 8 bytes, the bound CAN load tools use):

@@ -3,7 +3,7 @@ record and the bus trace, with the expectations of plan.py (the PVL as written):
 
 - move, ct: at the end of the step the actual position is within POSITION_TOLERANCE_MM of the target;
 - curve: from the moment the drive took the curve command (its record of executed commands; on the simulated
-  bus that is the end of the command's RxPDO3, tests/test_motion_job.py checks it) over the curve time, the demand position follows the curve as written within CURVE_DEMAND_TOLERANCE_MM and the actual
+  bus that is the end of the command's RxPDO3, tests/jobs/motion/test_motion_job.py checks it) over the curve time, the demand position follows the curve as written within CURVE_DEMAND_TOLERANCE_MM and the actual
   position within CURVE_ACTUAL_TOLERANCE_MM (the following error);
 - jog: over the step the demand velocity reached the jog velocity (within VELOCITY_TOLERANCE) in the jog's
   direction, the axis moved that way, and at the end it stands still (the jog input fell);

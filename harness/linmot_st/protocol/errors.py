@@ -4,7 +4,7 @@ This table is the single source of truth. `st_lib/types/errors.st` (the struct `
 hold these numbers as initial values, used by every FB) and the ErrorID table of `docs/st-library.md` are
 generated from it
 by `python -m linmot_st.protocol --write` (protocol/generate.py; `--check` exits 1 when they differ, and
-`tests/test_protocol_generate.py` runs it). `describe()` turns an ErrorID (and the SDO abort
+`tests/protocol/test_protocol_generate.py` runs it). `describe()` turns an ErrorID (and the SDO abort
 code an FB reports beside it) into text, for the commissioning report.
 
 Scheme (ErrorID is a WORD; the high byte is the group):

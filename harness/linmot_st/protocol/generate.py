@@ -34,10 +34,12 @@ class Generated:
         """What the file should hold, given what it holds now."""
         if self.begin is None:
             return self.render()
-        pattern = re.compile(re.escape(self.begin) + ".*?" + re.escape(self.end), re.S)
+        begin, end = self.begin, self.end
+        assert end is not None, f"{self.path}: a table between markers needs both"
+        pattern = re.compile(re.escape(begin) + ".*?" + re.escape(end), re.S)
         if not pattern.search(text):
-            raise ValueError(f"{self.path}: markers {self.begin!r} .. {self.end!r} not found")
-        return pattern.sub(lambda _m: "\n".join([self.begin, self.render(), self.end]), text)
+            raise ValueError(f"{self.path}: markers {begin!r} .. {end!r} not found")
+        return pattern.sub(lambda _m: "\n".join([begin, self.render(), end]), text)
 
 
 # ---------------------------------------------------------------- the ErrorIDs and the drive's errors

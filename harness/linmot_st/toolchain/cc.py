@@ -228,7 +228,7 @@ def compile_shared(units: list[Path], output: Path, *, include_dirs: list[Path] 
 def _error(failed) -> CCompileError:
     diagnostics: list[str] = []
     text: list[str] = []
-    for (unit, _, argv), proc in failed:
+    for (_unit, _, argv), proc in failed:
         text.append(f"$ {shlex.join(argv)}\n{proc.stderr.strip()}")
         diagnostics += [line for line in proc.stderr.splitlines() if ": error:" in line or ": fatal error:" in line]
     return CCompileError("C compilation failed:\n" + "\n".join(text), diagnostics)

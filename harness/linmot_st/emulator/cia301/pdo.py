@@ -23,7 +23,7 @@ from __future__ import annotations
 import struct
 from typing import Callable
 
-from ...protocol.upids import (V_ACTUAL_POSITION_16, V_DEMAND_CURRENT, V_DEMAND_POSITION_16, V_LOGGED_ERROR,
+from ...protocol.upids import (V_LOGGED_ERROR,
                                V_STATE_VAR, V_STATUS_WORD, V_WARN_WORD)
 
 # mapping parameters (interface layer; UPIDs INVENTED)

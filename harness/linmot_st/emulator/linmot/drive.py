@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import heapq
 import itertools
-import struct
 import threading
 from dataclasses import dataclass, field
 

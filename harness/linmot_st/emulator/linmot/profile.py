@@ -248,7 +248,8 @@ def load_parameters(path: Path, layer_of, definitions: Definitions = E1100_DEFIN
             layer = _int(row.get("layer") or "", "layer", where)
             if layer not in (1, 2, 3, 4):
                 raise ProfileError(f"{where}: layer {layer} is not 1..4")
-            row_layer = (lambda _upid, n=layer: n)
+            def row_layer(_upid: int, n: int = layer) -> int:
+                return n
         else:
             row_layer = layer_of
         if not definitions.stores_access_rights:

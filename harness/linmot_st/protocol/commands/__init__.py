@@ -19,7 +19,9 @@ from .row import (  # noqa: F401 (the catalogue's API)
     B1100, COMMANDS, E1100, IN_ANY_STATE, IN_OPERATION_ENABLED, CommandDef, Field, Kind, Start, Target,
     Transport, register,
 )
-# the groups register their rows on import; their ID constants are the catalogue's names (C.VAI_GO_TO_POS)
+# the groups register their rows on import, in this order (COMMANDS keeps it; isort leaves it alone); their ID
+# constants are the catalogue's names (C.VAI_GO_TO_POS)
+# isort: off
 from .system import *  # noqa: F401,F403
 from .vai import *  # noqa: F401,F403
 from .curves import *  # noqa: F401,F403
@@ -33,6 +35,7 @@ from .encoder_cam import *  # noqa: F401,F403
 from .encoder_sync import *  # noqa: F401,F403
 from .streams import *  # noqa: F401,F403
 from .curve_modify import *  # noqa: F401,F403
+# isort: on
 
 
 def command_id(header: int) -> int:
@@ -49,7 +52,7 @@ def decode(header: int, params: bytes) -> tuple[CommandDef | None, dict]:
     return c, dict(zip(c.field_names, values))
 
 
-def encode(cid: int, count: int = 0, **values) -> bytes:
+def encode(cid: int, count: int = 0, **values: int) -> bytes:
     """Header and parameters of a command, little endian (tests, tools). An ID the catalogue does not know gets
     its header alone (to provoke 0081h)."""
     header = struct.pack("<H", (cid << 4 | count & 0xF) & 0xFFFF)

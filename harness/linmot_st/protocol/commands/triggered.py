@@ -72,7 +72,8 @@ def _family(first: int, prefix: str, units: Units, mc: int) -> list[CommandDef]:
     ]
 
 
-def _based(cid: int, name: str, base: CommandDef | int, rising: bool, fields, mc: int, target=Target.NONE):
+def _based(cid: int, name: str, base: int, rising: bool, fields: tuple[Field, ...], mc: int,
+           target: Target = Target.NONE) -> CommandDef:
     TRIGGERED[cid] = Trigger(rising, base=base)
     return CommandDef(cid, name, fields, Kind.ON_TRIGGER, needs_homing=True, target=target,
                       source=f"[MC] 4.3.{mc}")

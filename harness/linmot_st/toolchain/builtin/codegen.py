@@ -996,7 +996,6 @@ class CodeGen:
         op = e.op
         if op in ("+", "-"):
             return f"({a} {op} {b})"
-        rt = e.right.ty.base()
         k = f"(double)({b})"
         if op == "*":       # by an integer too: MatIEC's C multiplies in double (__time_mul) either way
             return f"__time_mul({a}, {k}, {self.site(e.pos).args()})"

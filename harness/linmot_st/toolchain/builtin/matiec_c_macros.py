@@ -10,7 +10,7 @@ underscores inside) and that do not expand to themselves. Regenerate it with
 
     python -m linmot_st.toolchain.builtin.matiec_c_macros $MATIEC_HOME/lib/C
 
-tests/test_builtin_matiec_refusals.py derives it again where MatIEC is installed, and shows with iec2c + gcc
+tests/toolchain/builtin/test_builtin_matiec_refusals.py derives it again where MatIEC is installed, and shows with iec2c + gcc
 that such names break MatIEC's C, in which places.
 """
 

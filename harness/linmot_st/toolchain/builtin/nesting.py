@@ -18,7 +18,7 @@ argument is parsed, a binary operator keeps its left operand and itself = 2 whil
 parsed...), plus what the innermost token needs. Every figure below was measured with iec2c (MatIEC
 HEAD of 2024-10, flags -f -l -p) by bisection on the nesting depth of each construct; where variants
 differ, the largest is used, so the model may refuse a few levels that MatIEC would still accept, never
-the reverse. tests/test_builtin_nesting.py checks it against iec2c at the measured limits.
+the reverse. tests/toolchain/builtin/test_builtin_nesting.py checks it against iec2c at the measured limits.
 """
 
 from __future__ import annotations

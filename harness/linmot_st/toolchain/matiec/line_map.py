@@ -78,7 +78,7 @@ def _body_tails(lines: list[str]) -> set[int]:
     right before the `__end:` label, the label and the `return;` after it (an ST RETURN's own `goto __end;`
     comes earlier, with its own directive)."""
     tails: set[int] = set()
-    code = [i for i, l in enumerate(lines) if l.strip() and not _DIRECTIVE.match(l)]
+    code = [i for i, line in enumerate(lines) if line.strip() and not _DIRECTIVE.match(line)]
     for k, i in enumerate(code):
         if lines[i].strip() == "__end:":
             tails.add(i)

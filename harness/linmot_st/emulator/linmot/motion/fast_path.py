@@ -3,7 +3,7 @@
 A cycle is quiet when the generic cycle would only move the setpoint and the axis and find every output word
 (status, state var, warn, error) unchanged. Such cycles run in a tight loop, and, where no event-driven TxPDO
 depends on them (pdo.cycle_sensitive), ahead of the bus: the drive then asks to be woken only at the first
-cycle that is not quiet. tests/test_motion_equivalence.py checks that frames and trajectory are the same as
+cycle that is not quiet. tests/emulator/motion/test_motion_equivalence.py checks that frames and trajectory are the same as
 with every cycle run one by one.
 """
 

@@ -87,7 +87,7 @@ class MotionSettings:
     stream_buffer_points: int = 4
 
     # run quiet cycles (plain motion) in a tight loop and ahead of the bus: a speed-up with the same results
-    # (tests/test_motion_equivalence.py); False runs every cycle through the generic path
+    # (tests/emulator/motion/test_motion_equivalence.py); False runs every cycle through the generic path
     quiet_cycles: bool = True
 
     def with_(self, **changes) -> "MotionSettings":

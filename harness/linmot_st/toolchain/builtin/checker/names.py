@@ -31,7 +31,7 @@ NOT_RESERVED = {"Q", "IN", "PT", "PRIORITY", "INTERVAL", "SINGLE"}
 
 # words the builtin knows only to explain them (types and object-oriented constructs outside the subset)
 # that iec2c, with the build's flags (no -r), reads as ordinary identifiers: it builds them as the name of
-# a variable, field, POU, type, enumerated value, task, resource or instance (tests/test_builtin_matiec_names.py)
+# a variable, field, POU, type, enumerated value, task, resource or instance (tests/toolchain/builtin/test_builtin_matiec_names.py)
 MATIEC_IDENTIFIERS = {
     "CHAR", "WCHAR", "LTIME", "LDATE", "LTOD", "LDT", "LTIME_OF_DAY", "LDATE_AND_TIME",
     "METHOD", "END_METHOD", "INTERFACE", "END_INTERFACE", "EXTENDS", "IMPLEMENTS", "THIS", "SUPER",

@@ -2,7 +2,7 @@
 
 The families (table.py) are called by their name (ADD), by a typed variant that fixes the family's type
 variable (ADD_INT, MUX_DINT_INT), or, for the conversions, by one of MatIEC's `X_TO_Y` names, derived from
-rules that reproduce MatIEC's set (tests/test_builtin_stdlib.py compares the two where MatIEC is installed);
+rules that reproduce MatIEC's set (tests/toolchain/builtin/test_builtin_stdlib.py compares the two where MatIEC is installed);
 the durations' and dates' arithmetic has its own names (ADD_TOD_TIME...). `lookup` resolves a name, and the
 checker records what it resolved a call to as a `StdCall` for the code generator.
 """
