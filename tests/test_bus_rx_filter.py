@@ -105,11 +105,11 @@ def test_the_demo_puts_the_same_frames_on_the_bus_with_and_without_the_drives_fi
     trace, phases and steps are identical to offering every frame to every drive."""
     import dataclasses
 
-    from linmot_st.commission.runner import RunOptions
-    from linmot_st.commission.testing import project_build
-    from linmot_st.motion.budget import job_budget
-    from linmot_st.motion.job import job_drives, motion_phase, run
-    from linmot_st.motion.plan import plan as make_plan
+    from linmot_st.jobs.commission.runner import RunOptions
+    from linmot_st.jobs.commission.testing import project_build
+    from linmot_st.jobs.motion.budget import job_budget
+    from linmot_st.jobs.motion.job import job_drives, motion_phase, run
+    from linmot_st.jobs.motion.plan import plan as make_plan
     from linmot_st.pvl import load_pvl
 
     pvl = load_pvl(REPO / "examples" / "two_axes.pvl")

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from linmot_st.commission.project import INSTANCE, MAILBOX
-from linmot_st.commission.testing import project_build
+from linmot_st.jobs.commission.project import INSTANCE, MAILBOX
+from linmot_st.jobs.commission.testing import project_build
 
 sys.path.insert(0, str(Path(__file__).parent / "st_lib"))
 from plcopen_checks import (assert_exclusive, check_rising_edge_after_the_pulse, check_toggled_execute,  # noqa: E402

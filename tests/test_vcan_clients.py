@@ -120,9 +120,9 @@ def test_bad_traffic_from_cangen_crashes_neither_the_drive_nor_the_plc(tmp_path)
     # where and why; the drive keeps serving; nothing raises; a PASSED run holds the dataset
     import re
 
-    from linmot_st.commission.runner import RunOptions
-    from linmot_st.commission.testing import EXAMPLE, example
-    from linmot_st.commission.verify import verify
+    from linmot_st.jobs.commission.runner import RunOptions
+    from linmot_st.jobs.commission.testing import EXAMPLE, example
+    from linmot_st.jobs.commission.verify import verify
     from linmot_st.emulator.testing import RawSdoClient
     from linmot_st.vcan.testing import linmot_st
 

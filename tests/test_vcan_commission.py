@@ -7,9 +7,9 @@ from __future__ import annotations
 
 import pytest
 
-from linmot_st.commission.runner import RunOptions
-from linmot_st.commission.testing import EXAMPLE, commission, example
-from linmot_st.commission.verify import drive_state, verify
+from linmot_st.jobs.commission.runner import RunOptions
+from linmot_st.jobs.commission.testing import EXAMPLE, commission, example
+from linmot_st.jobs.commission.verify import drive_state, verify
 from linmot_st.vcan.testing import Candump, EmulatedDrives, linmot_st, sdo_frames, without_busy_polls
 
 pytestmark = pytest.mark.socketcan

@@ -434,7 +434,7 @@ class RealTimeRig(Rig):
         import uuid
 
         from linmot_st.bus import open_bus
-        from linmot_st.commission.runner import _RecordingBus      # the PLC side's frame record
+        from linmot_st.jobs.commission.runner import _RecordingBus      # the PLC side's frame record
         from linmot_st.cosim import RealTimeCoSim
         from linmot_st.emulator.models import make_drive
         from linmot_st.plc import Plc

@@ -70,7 +70,7 @@ def _measure(kind: str, n: int, backend: str) -> dict:
     with tempfile.TemporaryDirectory(prefix="linmot-st-bigbuild-") as tmp:
         os.environ["LINMOT_ST_CACHE"] = str(Path(tmp) / "cache")
         if kind == "dataset":
-            from linmot_st.commission.project import build_project, prepare
+            from linmot_st.jobs.commission.project import build_project, prepare
             res = build_project(prepare(big_pvl(n), "big.pvl"), backend)
         else:
             src = Path(tmp) / "big.st"

@@ -30,8 +30,8 @@ def measure_here() -> list[dict]:
 
     from linmot_st.bus import Frame, NodeServer
     from linmot_st.bus.bench import RequestLoop
-    from linmot_st.commission.runner import RunOptions, run
-    from linmot_st.commission.testing import example, project_build
+    from linmot_st.jobs.commission.runner import RunOptions, run
+    from linmot_st.jobs.commission.testing import example, project_build
     from linmot_st.cosim import RealTimeCoSim
     from linmot_st.plc import Plc
 

@@ -3,7 +3,7 @@ bus at 500 kbit/s, with the command's defaults (realistic drive timings, flash, 
 the drive's slow services (write and verify only); the PLC's cost per scan; and what passing the dataset
 VAR_IN_OUT would cost per scan instead of the 2-word window (the design choice of docs/commissioning.md).
 
-Run: `python -m linmot_st.commission.bench` (or `make bench`).
+Run: `python -m linmot_st.jobs.commission.bench` (or `make bench`).
 """
 
 from __future__ import annotations
@@ -167,7 +167,7 @@ def run() -> list[dict]:
     out += memory_figures(res)
     # VAR_IN_OUT dataset vs the 2-word window, 8 FBs per scan, on each backend available
     from linmot_st.toolchain import builtin_available, matiec_available
-    folder = Path(__file__).resolve().parents[3] / "build" / "bench" / "commission"
+    folder = Path(__file__).resolve().parents[4] / "build" / "bench" / "commission"
     folder.mkdir(parents=True, exist_ok=True)
     for backend, ok in (("matiec", matiec_available()), ("builtin", builtin_available())):
         if not ok:

@@ -20,7 +20,7 @@ import tempfile
 import time
 from pathlib import Path
 
-REPO = Path(__file__).resolve().parents[3]
+REPO = Path(__file__).resolve().parents[4]
 EXAMPLE = REPO / "examples" / "two_axes.pvl"
 TARGETS = {2: 300.0, 16: 50.0}
 
@@ -57,7 +57,7 @@ def _timed_scans(acc: dict):
 def measure(axes: int, fast_idle: bool = True, report: Path | None = None, c_share: bool = False) -> dict:
     """One demo run; its figures (simulated s, wall s, ratio, scans, of which idle in C, frames)."""
     from linmot_st.cli import build_parser
-    from linmot_st.commission.cli import commission_report, prepare_run, write_outputs
+    from linmot_st.jobs.commission.cli import commission_report, prepare_run, write_outputs
 
     from .budget import job_budget
     from .check import check_motion
@@ -104,8 +104,8 @@ def capacity(bitrate: int, share_percent: float = 70.0) -> dict:
     """The most axes the bus budget admits at this bit rate (at most plc_project's 32), moved by the job: whether
     it passed, and the load after the PDO setup (mean, busiest 100 ms). Fast drive timings (the commissioning's
     speed does not matter here)."""
-    from linmot_st.commission.project import MAX_AXES, build_project, prepare
-    from linmot_st.commission.runner import RunOptions
+    from linmot_st.jobs.commission.project import MAX_AXES, build_project, prepare
+    from linmot_st.jobs.commission.runner import RunOptions
     from linmot_st.pvl import load_pvl
 
     from .budget import job_inputs, plan_budget
@@ -143,7 +143,7 @@ def capacity_rows() -> list[dict]:
 
 
 def run() -> list[dict]:
-    from linmot_st.commission.project import MAX_AXES
+    from linmot_st.jobs.commission.project import MAX_AXES
 
     rows = []
     for axes in TARGETS:

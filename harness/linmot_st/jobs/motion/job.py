@@ -1,7 +1,7 @@
-"""Running the motion job: commissioning (linmot_st.commission.runner), then, on the same PLC, bus and drives,
+"""Running the motion job: commissioning (linmot_st.jobs.commission.runner), then, on the same PLC, bus and drives,
 plc_project's motion steps on every axis (plc_project/motion.st), sampled scan by scan.
 
-    from linmot_st.motion.job import run_job
+    from linmot_st.jobs.motion.job import run_job
     result = run_job(pvl, RunOptions(axes=2, timings="fast"), build_result, plan(pvl))
     result.commission            # the commissioning RunResult (its .after is the MotionResult)
 """
@@ -12,8 +12,8 @@ import time
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 
-from linmot_st.commission.project import INSTANCE
-from linmot_st.commission.runner import RunOptions, RunResult, run
+from linmot_st.jobs.commission.project import INSTANCE
+from linmot_st.jobs.commission.runner import RunOptions, RunResult, run
 from linmot_st.cosim import IdlePredicate
 
 from linmot_st.protocol.upids import P_MASTER_ENCODER_SOURCE, P_TRIGGER_MODE
@@ -168,7 +168,7 @@ class MotionSampler(IdlePredicate):
 
 
 def _write_steps(plc, plan: Plan, inhibit_100us: int = 0) -> None:
-    # every step carries the TxPDO2 inhibit time of the bus budget (linmot_st.motion.budget); SETUP uses it
+    # every step carries the TxPDO2 inhibit time of the bus budget (linmot_st.jobs.motion.budget); SETUP uses it
     values = [{**s.plc_value(), "INHIBIT100US": inhibit_100us} for s in plan.steps]
     blank = {"KIND": "PLC_STEP_NONE", "POSITION": 0.0, "VELOCITY": 0.0, "ACCELERATION": 0.0, "CURVEID": 0,
              "ENTRY": 0, "INHIBIT100US": 0, "HOLD": 0}
@@ -178,7 +178,7 @@ def _write_steps(plc, plan: Plan, inhibit_100us: int = 0) -> None:
 
 def motion_phase(plan: Plan, timeout_s: float, progress=None, inhibit_100us: int = 0, toggle_inputs: bool = True):
     """The `after` hook of the commissioning runner: runs the steps on every commissioned axis, with this TxPDO2
-    inhibit time (the bus budget's, linmot_st.motion.budget)."""
+    inhibit time (the bus budget's, linmot_st.jobs.motion.budget)."""
 
     def after(plc, sim, drives) -> MotionResult:
         from linmot_st.cosim import CoSimTimeout
@@ -252,7 +252,7 @@ def placed_drives(stroke, opts: RunOptions, datasets=None, trigger_mode: int | N
     trigger input's mode 170Ch stored in the drive as the machine was set up (the rig wires X4.6 for the
     trigger step; a PVL that sets 170Ch is written over it by the commissioning); `encoder_source`: 172Ah, the
     master encoder wired (the conveyor of the cam steps), stored the same way."""
-    from linmot_st.commission.runner import emulated_drive
+    from linmot_st.jobs.commission.runner import emulated_drive
 
     def factory(node: int):
         drive = emulated_drive(node, opts, datasets, motion=stroke.settings())

@@ -1,6 +1,6 @@
 """Running a commissioning: emulated drives on a bus, the PLC stepped until every axis is done or failed.
 
-    from linmot_st.commission.runner import RunOptions, run
+    from linmot_st.jobs.commission.runner import RunOptions, run
     result = run(pvl, RunOptions(axes=2), build_result=res)
 
 On the simulated bus (`bus="sim"`) everything runs in virtual time with CoSim; on a python-can bus
@@ -382,7 +382,7 @@ def run(pvl, opts: RunOptions, build_result, *, dataset=None, datasets=None, pro
     """Commission with the PLC of `build_result` (plc_project with this PVL's dataset). `prepare_plc(plc)`
     runs after the program's settings are written and before the first scan (tests: patch the dataset).
     `after(plc, cosim, drives)` runs once every axis is commissioned, on the same PLC, bus and drives, before
-    they are shut down (the motion job: linmot_st.motion); its result is RunResult.after. `datasets`
+    they are shut down (the motion job: linmot_st.jobs.motion); its result is RunResult.after. `datasets`
     (datasets.Datasets, built with this PLC's dataset file) gives nodes datasets of their own."""
     from linmot_st.plc import Plc
 

@@ -1,7 +1,7 @@
 """The fault-injection matrix of the commissioning: every fault family at every phase, checked against the
 emulated drive's memory (docs/commissioning.md, "The fault-injection matrix").
 
-    from linmot_st.commission.faultmatrix import FAMILIES, PHASES, run_cell, totals
+    from linmot_st.jobs.commission.faultmatrix import FAMILIES, PHASES, run_cell, totals
     cell = run_cell("lost", "curves")
     cell.problems()          # [] when the cell meets every target
 

@@ -16,7 +16,7 @@ import argparse
 import sys
 from dataclasses import dataclass
 
-from ..cliargs import (UsageError, can_bitrate, check_output_file, check_output_folder, error, int_range,
+from ...cliargs import (UsageError, can_bitrate, check_output_file, check_output_folder, error, int_range,
                        positive_seconds)
 
 

@@ -3,7 +3,7 @@ the TxPDO2 inhibit time (event mode) or SYNC period (SYNC mode) that keeps that 
 
 The Python twin of st_lib/motion/budget.st (FB_LmPdoBudget, which a PLC program calls before motion): the same
 integer arithmetic, cross-checked by the shared vectors tests/vectors/pdo_budget.json (written from this module
-by `python -m linmot_st.motion.budget --write`; tests/test_motion_budget.py runs both against them).
+by `python -m linmot_st.jobs.motion.budget --write`; tests/test_motion_budget.py runs both against them).
 
 What is counted, per axis and second (docs/bus.md, "The process-data budget"), every frame at its worst-case
 length with stuff bits (linmot_st.bus.bits.max_bus_bits: 135 bits for 8 bytes, the bound CAN load tools use):
@@ -26,7 +26,7 @@ from pathlib import Path
 from linmot_st.bus.bits import max_bus_bits
 
 EVENT, SYNC = "event", "sync"
-VECTORS = Path(__file__).resolve().parents[3] / "tests" / "vectors" / "pdo_budget.json"
+VECTORS = Path(__file__).resolve().parents[4] / "tests" / "vectors" / "pdo_budget.json"
 
 
 @dataclass(frozen=True)
@@ -162,8 +162,8 @@ def _vector_inputs() -> list[BudgetInputs]:
 
 def vectors() -> dict:
     rows = [dict(inputs=asdict(i), budget=asdict(plan_budget(i))) for i in _vector_inputs()]
-    return {"about": "process-data budget (linmot_st.motion.budget, st_lib/motion/budget.st); written by "
-                     "python -m linmot_st.motion.budget --write",
+    return {"about": "process-data budget (linmot_st.jobs.motion.budget, st_lib/motion/budget.st); written by "
+                     "python -m linmot_st.jobs.motion.budget --write",
             "frame_bits": {str(d): frame_bits(d) for d in range(9)}, "vectors": rows}
 
 

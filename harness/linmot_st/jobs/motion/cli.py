@@ -16,7 +16,7 @@ import sys
 
 
 def register(subparsers) -> None:
-    from linmot_st.commission.cli import add_run_arguments
+    from linmot_st.jobs.commission.cli import add_run_arguments
 
     p = subparsers.add_parser(
         "motion", help="commission emulated E1100 drives from a PVL file, then move them with the PLC, and report",
@@ -39,7 +39,7 @@ def _share(text: str) -> float:
 
 
 def command_line(args: argparse.Namespace) -> str:
-    from linmot_st.commission.cli import command_line as commission_line
+    from linmot_st.jobs.commission.cli import command_line as commission_line
 
     line = commission_line(argparse.Namespace(**{**vars(args), "live_ram": False, "flash": True, "reset": True,
                                                  "verify": True, "emulate": True}))
@@ -52,8 +52,8 @@ def run_command(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from linmot_st.cliargs import error
-    from linmot_st.commission.cli import commission_report, prepare_run, write_outputs
-    from linmot_st.commission.progress import Progress
+    from linmot_st.jobs.commission.cli import commission_report, prepare_run, write_outputs
+    from linmot_st.jobs.commission.progress import Progress
 
     from .check import check_motion
     from .job import as_commissioned, run_job
