@@ -35,7 +35,7 @@ st-coverage: $(STAMP)
 	  -o linmot_st_cov_pous=false $(ST_COVERAGE_TESTS)
 
 bench: $(STAMP)
-	$(BIN)/python -m linmot_st.bench
+	$(BIN)/python -m linmot_st_bench
 
 clean:
 	rm -rf build .pytest_cache

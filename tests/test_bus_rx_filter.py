@@ -136,7 +136,7 @@ def test_the_demo_puts_the_same_frames_on_the_bus_with_and_without_the_drives_fi
 def test_the_motion_bench_with_sync_is_the_same_with_and_without_the_drives_filters(monkeypatch):
     """Three drives moving with TxPDO2 on every SYNC (the emulator's bench scenario): SYNC, the RxPDOs and the
     other drives' frames, with the filters and without, give the same trace and trajectories."""
-    from linmot_st.emulator.linmot.motion import bench
+    from linmot_st_bench import emulator_mc as bench
 
     out = {}
     for filters in (False, True):

@@ -1,6 +1,6 @@
 """Toolchain and PLC runtime figures: build times (cold, cached), scans per second, Python cost per step.
 
-Run: `python -m linmot_st.toolchain.bench` (or `make bench` for every area). Each available backend is
+Run: `python -m linmot_st_bench.toolchain` (or `make bench` for every area). Each available backend is
 measured. Cold builds use a fresh cache folder, so they include iec2c/the builtin compiler and gcc.
 """
 
@@ -11,7 +11,7 @@ import tempfile
 import time
 from pathlib import Path
 
-REPO = Path(__file__).resolve().parents[3]
+REPO = Path(__file__).resolve().parents[2]
 
 TRIVIAL = """
 PROGRAM Main
@@ -37,12 +37,12 @@ TARGET_CACHED_S = 0.2
 
 
 def _backends() -> list[str]:
-    from . import builtin_available, matiec_available
+    from linmot_st.toolchain import builtin_available, matiec_available
     return [b for b, ok in (("matiec", matiec_available()), ("builtin", builtin_available())) if ok]
 
 
 def _build_times(path: Path, backend: str, cache: Path, repeats: int = 5) -> tuple[float, float]:
-    from . import build
+    from linmot_st.toolchain import build
     t0 = time.perf_counter()
     res = build(path, backend=backend, cache_dir=cache)
     cold = time.perf_counter() - t0
@@ -95,8 +95,8 @@ def _step_io_us(plc, n: int = 100_000) -> float:
 
 
 def run() -> list[dict]:
-    from ..plc import Plc
-    from . import build
+    from linmot_st.plc import Plc
+    from linmot_st.toolchain import build
     rows: list[dict] = []
     backends = _backends()
     if not backends:
@@ -143,7 +143,7 @@ def run() -> list[dict]:
                 rows.append(dict(name=f"build {label}, cached, in a fresh Python process ({backend})",
                                  value=round(_fresh_process_build(path, backend, tmp / f"{path.stem}-{backend}"), 3),
                                  unit="s", target=None))
-    from . import bigbuild
+    from linmot_st_bench import toolchain_bigbuild as bigbuild
     for backend in backends:
         try:   # the 100k-statement program on the builtin backend only: iec2c alone takes minutes on it
             rows += bigbuild.rows(backend, program=backend == "builtin" or len(backends) == 1)

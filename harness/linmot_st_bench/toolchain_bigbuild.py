@@ -3,8 +3,8 @@
 an empty cache, so that imports, the ST compiler and gcc are all counted, and gcc's peak memory is that
 process's largest child (resource.getrusage(RUSAGE_CHILDREN)).
 
-`python -m linmot_st.toolchain.bigbuild dataset|program [N] [--backend B]` prints one build's figures as
-JSON; linmot_st.toolchain.bench puts them into `make bench`.
+`python -m linmot_st_bench.toolchain_bigbuild dataset|program [N] [--backend B]` prints one build's figures as
+JSON; linmot_st_bench.toolchain puts them into `make bench`.
 """
 
 from __future__ import annotations
@@ -86,7 +86,7 @@ def _measure(kind: str, n: int, backend: str) -> dict:
 def measure(kind: str, n: int | None = None, backend: str = "auto") -> dict:
     """One cold build in a fresh Python process (imports included): the figures of _measure."""
     n = n or (DATASET_CURVES if kind == "dataset" else PROGRAM_STATEMENTS)
-    proc = subprocess.run([sys.executable, "-m", "linmot_st.toolchain.bigbuild", kind, str(n), "--backend", backend],
+    proc = subprocess.run([sys.executable, "-m", "linmot_st_bench.toolchain_bigbuild", kind, str(n), "--backend", backend],
                           capture_output=True, text=True, check=False)
     if proc.returncode != 0:
         raise RuntimeError(f"bigbuild {kind} {n} failed:\n{proc.stderr[-2000:]}")
@@ -110,7 +110,7 @@ def rows(backend: str, program: bool = True) -> list[dict]:
 
 def main(argv: list[str]) -> int:
     import argparse
-    p = argparse.ArgumentParser(prog="python -m linmot_st.toolchain.bigbuild")
+    p = argparse.ArgumentParser(prog="python -m linmot_st_bench.toolchain_bigbuild")
     p.add_argument("kind", choices=("dataset", "program"))
     p.add_argument("n", type=int, nargs="?", help="curves (dataset) or statements (program)")
     p.add_argument("--backend", default="auto")

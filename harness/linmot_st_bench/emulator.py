@@ -1,7 +1,7 @@
-"""Figures of the emulated drive (`make bench` prints them; `python -m linmot_st.emulator.bench`).
+"""Figures of the emulated drive (`make bench` prints them; `python -m linmot_st_bench.emulator`).
 
 - on the simulated bus at 500 kbit/s, with a client that sends the next request when the answer arrives
-  (`linmot_st.bus.bench.RequestLoop`): expedited manufacturer-object exchanges (parameter RAM read, then
+  (`linmot_st_bench.bus.RequestLoop`): expedited manufacturer-object exchanges (parameter RAM read, then
   write) per wall-clock second, the issue's target (>= 50,000). The best of several runs is reported, with
   the 1-minute load average at the time: on a shared, loaded 2-core machine one run can drop far below;
 - the drive alone (sans-I/O, no bus): expedited parameter reads per wall-clock second, best of the runs;
@@ -19,13 +19,13 @@ import os
 import struct
 import time
 
-from ..bus import Frame
-from ..bus.bench import RequestLoop, run_loop
-from .linmot.curves import Curve
-from .linmot.drive import E1100Drive
-from .models import make_drive
-from .linmot.motion import bench as motion_bench
-from .linmot.motion import cam_bench, stream_bench
+from linmot_st.bus import Frame
+from linmot_st_bench.bus import RequestLoop, run_loop
+from linmot_st.emulator.linmot.curves import Curve
+from linmot_st.emulator.linmot.drive import E1100Drive
+from linmot_st.emulator.models import make_drive
+from linmot_st_bench import emulator_mc as motion_bench
+from linmot_st_bench import emulator_mc_cam as cam_bench, emulator_mc_stream as stream_bench
 
 S = 1_000_000_000
 RUNS = 5

@@ -20,7 +20,7 @@ import tempfile
 import time
 from pathlib import Path
 
-REPO = Path(__file__).resolve().parents[4]
+REPO = Path(__file__).resolve().parents[2]
 EXAMPLE = REPO / "examples" / "two_axes.pvl"
 TARGETS = {2: 300.0, 16: 50.0}
 
@@ -59,12 +59,12 @@ def measure(axes: int, fast_idle: bool = True, report: Path | None = None, c_sha
     from linmot_st.cli import build_parser
     from linmot_st.jobs.commission.cli import commission_report, prepare_run, write_outputs
 
-    from .budget import job_budget
-    from .check import check_motion
-    from .cli import command_line
-    from .job import motion_phase, run
-    from .plan import plan as make_plan
-    from .report import MotionReport
+    from linmot_st.jobs.motion.budget import job_budget
+    from linmot_st.jobs.motion.check import check_motion
+    from linmot_st.jobs.motion.cli import command_line
+    from linmot_st.jobs.motion.job import motion_phase, run
+    from linmot_st.jobs.motion.plan import plan as make_plan
+    from linmot_st.jobs.motion.report import MotionReport
 
     argv = ["motion", str(EXAMPLE), "--axes", str(axes), "--drive-timings", "real", "--quiet"]
     if report is not None:
@@ -108,10 +108,10 @@ def capacity(bitrate: int, share_percent: float = 70.0) -> dict:
     from linmot_st.jobs.commission.runner import RunOptions
     from linmot_st.pvl import load_pvl
 
-    from .budget import job_inputs, plan_budget
-    from .check import check_motion
-    from .job import run_job
-    from .plan import plan as make_plan
+    from linmot_st.jobs.motion.budget import job_inputs, plan_budget
+    from linmot_st.jobs.motion.check import check_motion
+    from linmot_st.jobs.motion.job import run_job
+    from linmot_st.jobs.motion.plan import plan as make_plan
 
     axes = max(n for n in range(1, MAX_AXES + 1) if plan_budget(job_inputs(n, bitrate, share_percent)).fits)
     budget = plan_budget(job_inputs(axes, bitrate, share_percent))

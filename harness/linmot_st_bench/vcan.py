@@ -1,5 +1,5 @@
 """Real-time figures on a real SocketCAN stack (vcan0), for `make bench`: measured where this kernel has vcan0,
-else inside a User-Mode Linux guest (linmot_st.vcan.Machine), else reported as not measured with the reason.
+else inside a User-Mode Linux guest (linmot_st_vcan.Machine), else reported as not measured with the reason.
 
 1. Expedited SDO exchanges per second between a python-can client (`RequestLoop`, one request outstanding)
    and `linmot-st emulate` in another process: the stack's and the emulator's bound, no PLC.
@@ -8,7 +8,7 @@ else inside a User-Mode Linux guest (linmot_st.vcan.Machine), else reported as n
    co-simulation keeps to its task (late scans, worst lateness, ticks skipped).
 3. The same PLC idle for 2000 scans: late scans and worst lateness with no traffic.
 
-Run: `python -m linmot_st.vcan.bench` (or `make bench`); `--here` measures on this kernel's vcan0 and prints
+Run: `python -m linmot_st_bench.vcan` (or `make bench`); `--here` measures on this kernel's vcan0 and prints
 the figures as JSON (what the guest runs).
 """
 
@@ -29,13 +29,13 @@ def measure_here() -> list[dict]:
     import can
 
     from linmot_st.bus import Frame, NodeServer
-    from linmot_st.bus.bench import RequestLoop
+    from linmot_st_bench.bus import RequestLoop
     from linmot_st.jobs.commission.runner import RunOptions, run
     from linmot_st.jobs.commission.testing import example, project_build
     from linmot_st.cosim import RealTimeCoSim
     from linmot_st.plc import Plc
 
-    from .testing import EmulatedDrives
+    from linmot_st_vcan.testing import EmulatedDrives
 
     build = project_build()
     rows = []
@@ -89,7 +89,7 @@ def measure_here() -> list[dict]:
 
 
 def run() -> list[dict]:
-    from . import Machine, Unavailable, native
+    from linmot_st_vcan import Machine, Unavailable, native
 
     load = os.getloadavg()[0]
     if native():
@@ -101,7 +101,7 @@ def run() -> list[dict]:
             machine = Machine()
             with tempfile.TemporaryDirectory(prefix="linmot-st-vcan-bench-") as work:
                 out = Path(work) / "figures.json"
-                guest = machine.run([sys.executable, "-m", "linmot_st.vcan.bench", "--here", str(out)],
+                guest = machine.run([sys.executable, "-m", "linmot_st_bench.vcan", "--here", str(out)],
                                     timeout_s=600, work_dir=Path(work) / "guest", writable=(work,))
                 if not guest.ok or not out.exists():
                     raise RuntimeError("the measurement in the guest failed\n" + guest.describe())

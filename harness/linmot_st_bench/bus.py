@@ -1,8 +1,8 @@
-"""Benchmarks of the simulated bus and the co-simulation, in one process. Run: `python -m linmot_st.bus.bench`.
+"""Benchmarks of the simulated bus and the co-simulation, in one process. Run: `python -m linmot_st_bench.bus`.
 
 1. The bus alone: expedited SDO exchanges per wall-clock second between a client that keeps one request
    outstanding (`RequestLoop`) and a trivial echo node answering a fixed 43h frame. (The emulated drive's
-   figure, the issue's target, is measured by `python -m linmot_st.emulator.bench` with the same client.)
+   figure, the issue's target, is measured by `python -m linmot_st_bench.emulator` with the same client.)
 2. `frame_length_bits` on distinct frames (the uncached path).
 3. Co-simulation scans per wall-clock second of a compiled ST program (built with the first available
    backend) that echoes each received frame, against a node that answers each echo at once: one
@@ -13,8 +13,8 @@ from __future__ import annotations
 
 import time
 
-from .frame import Frame
-from .sim import SimBus
+from linmot_st.bus.frame import Frame
+from linmot_st.bus.sim import SimBus
 
 
 class RequestLoop:
@@ -109,7 +109,7 @@ def measure_echo_exchanges(total: int = 20_000, bitrate: int = 500_000) -> float
 
 def measure_bit_length(n: int = 200_000) -> float:
     """frame_length_bits() calls per second on distinct 8-byte frames (the uncached path)."""
-    from .bits import frame_length_bits
+    from linmot_st.bus.bits import frame_length_bits
 
     frames = [Frame(0x601, i.to_bytes(8, "little")) for i in range(1000)]
     t0 = time.perf_counter()
@@ -167,9 +167,9 @@ def measure_cosim(scans: int = 20_000) -> list[dict]:
     from linmot_st.cosim import CoSim
     from linmot_st.plc import Plc
 
-    from .nodes import ScriptedNode
+    from linmot_st.bus.nodes import ScriptedNode
 
-    st_lib = Path(__file__).resolve().parents[3] / "st_lib"
+    st_lib = Path(__file__).resolve().parents[2] / "st_lib"
     backend = "builtin" if toolchain.builtin_available() else "matiec" if toolchain.matiec_available() else None
     if backend is None or not (st_lib / "types" / "can.st").is_file():
         return [dict(name="co-simulation: skipped (no ST backend or no st_lib)", value=0, unit="", target=None)]

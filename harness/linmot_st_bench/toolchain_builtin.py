@@ -1,6 +1,6 @@
 """Figures of the builtin compiler: time to compile ST to C (parse, check, generate) and gcc's time on the C.
 
-    python -m linmot_st.toolchain.builtin.bench
+    python -m linmot_st_bench.toolchain_builtin
 
 Inputs: the ST library's testbench (tests/st_lib/testbench.st, which includes all of st_lib) when the
 repository is at hand, and a generated 3,000-line program of function blocks instantiated by a
@@ -14,9 +14,9 @@ import tempfile
 import time
 from pathlib import Path
 
-from ..cc import BASE_FLAGS, BUILTIN_FLAGS
+from linmot_st.toolchain.cc import BASE_FLAGS, BUILTIN_FLAGS
 
-REPO = Path(__file__).resolve().parents[4]
+REPO = Path(__file__).resolve().parents[2]
 TESTBENCH = REPO / "tests" / "st_lib" / "testbench.st"
 TARGET_COLD_S = 5.0
 CFLAGS = [*BASE_FLAGS, *BUILTIN_FLAGS]   # as the build gives them
@@ -65,7 +65,7 @@ def _best(fn, repeats: int = 3) -> float:
 
 
 def _measure(entry: Path, root: Path, label: str) -> list[dict]:
-    from . import compile_to_c
+    from linmot_st.toolchain.builtin import compile_to_c
     out = Path(tempfile.mkdtemp(prefix="builtin-bench-"))
     st_lines = 0
     res = compile_to_c(entry, root, out)

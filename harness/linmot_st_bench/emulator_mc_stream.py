@@ -1,5 +1,5 @@
 """The cost of a streaming drive: simulated seconds per wall-clock second (`make bench`, through
-linmot_st.emulator.bench; `python -m linmot_st.emulator.linmot.motion.stream_bench`).
+linmot_st_bench.emulator; `python -m linmot_st_bench.emulator_mc_stream`).
 
 One emulated E1100 on a 1 Mbit/s SimBus with a master node that plays an NC master: it starts, enables and
 homes the drive, then sends a PV stream (031xh, [MC] 4.3.39) of a 20 mm cosine stroke at 1 Hz, one setpoint per
@@ -16,11 +16,11 @@ import os
 import struct
 import time
 
-from ....bus import Frame, SimBus
-from ....protocol import commands as C
-from ..drive import DriveTimings, E1100Drive
-from ..profile import load_profile
-from ...models import make_drive
+from linmot_st.bus import Frame, SimBus
+from linmot_st.protocol import commands as C
+from linmot_st.emulator.linmot.drive import DriveTimings, E1100Drive
+from linmot_st.emulator.linmot.profile import load_profile
+from linmot_st.emulator.models import make_drive
 
 MS = 1_000_000
 S = 1_000_000_000

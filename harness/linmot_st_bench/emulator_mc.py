@@ -1,5 +1,5 @@
 """The cost of simulating moving axes: simulated seconds per wall-clock second (`make bench`, through
-linmot_st.emulator.bench; `python -m linmot_st.emulator.linmot.motion.bench`).
+linmot_st_bench.emulator; `python -m linmot_st_bench.emulator_mc`).
 
 N emulated E1100 drives on one 1 Mbit/s SimBus with a master node that plays a PLC: it starts them, enables and
 homes them, then sends each drive a VAI 16-bit move back and forth (0 <-> 100 mm, 1 m/s, 10 m/s^2; a new
@@ -16,12 +16,12 @@ import os
 import struct
 import time
 
-from ....bus import Frame, SimBus
-from ..drive import DriveTimings, E1100Drive
-from ...models import make_drive
-from ..profile import load_profile
-from ....protocol import commands as C
-from .settings import MotionSettings
+from linmot_st.bus import Frame, SimBus
+from linmot_st.emulator.linmot.drive import DriveTimings, E1100Drive
+from linmot_st.emulator.models import make_drive
+from linmot_st.emulator.linmot.profile import load_profile
+from linmot_st.protocol import commands as C
+from linmot_st.emulator.linmot.motion.settings import MotionSettings
 
 MS = 1_000_000
 S = 1_000_000_000

@@ -1,8 +1,8 @@
-"""`python -m linmot_st.vcan [--timeout S] COMMAND...`: run a command in a User-Mode Linux guest with vcan0 and
+"""`python -m linmot_st_vcan [--timeout S] COMMAND...`: run a command in a User-Mode Linux guest with vcan0 and
 vcan1 up (the test environment of the socketcan tests), with this checkout and venv; its output is printed,
 the exit status is the command's (125 when no guest can be had here, 124 at the timeout).
 
-    python -m linmot_st.vcan -- sh -c 'linmot-st emulate --interface socketcan --channel vcan0 --fast &
+    python -m linmot_st_vcan -- sh -c 'linmot-st emulate --interface socketcan --channel vcan0 --fast &
                                        sleep 5; linmot-st commission examples/two_axes.pvl --bus socketcan:vcan0 --no-emulate'
 """
 
@@ -15,7 +15,7 @@ import sys
 def main(argv: list[str] | None = None) -> int:
     from . import Machine, Unavailable
 
-    parser = argparse.ArgumentParser(prog="python -m linmot_st.vcan", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="python -m linmot_st_vcan", description=__doc__.splitlines()[0])
     parser.add_argument("--timeout", type=float, default=600, metavar="S", help="stop the guest after S seconds")
     parser.add_argument("command", nargs=argparse.REMAINDER, help="the command and its arguments")
     args = parser.parse_args(argv)

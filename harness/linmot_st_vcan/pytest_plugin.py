@@ -5,7 +5,7 @@
 
 Where this kernel has the interfaces (a Linux machine after `modprobe vcan` and `ip link add`, or inside the
 guest) such a test runs as usual. Elsewhere the plugin runs it inside a User-Mode Linux guest
-(`linmot_st.vcan.Machine`, one guest per test, vcan0 and vcan1 up): `python -m pytest NODEID` with the same
+(`linmot_st_vcan.Machine`, one guest per test, vcan0 and vcan1 up): `python -m pytest NODEID` with the same
 checkout and venv, whose reports (pass, failure with its traceback, skip with its reason) come back as this
 test's reports, like pytest-forked does for a forked process. A failing test's report gets a section with the
 guest's output and kernel log. When the guest cannot be had here (no apt, no network to Debian's archive, a

@@ -1,6 +1,6 @@
 """Run one command inside a User-Mode Linux kernel that has a real SocketCAN stack and vcan interfaces.
 
-    from linmot_st.vcan import Machine
+    from linmot_st_vcan import Machine
     run = Machine().run(["candump", "-n", "1", "vcan0"], timeout_s=60)
     run.returncode, run.output, run.kernel_log
 
@@ -73,7 +73,7 @@ class GuestRun:
 
 FAIL_MARK = "linmot-st init failed: "       # the init's line on the console when it cannot set the guest up
 INIT = """#!{busybox} sh
-# PID 1 of the guest (written by linmot_st.vcan.uml for one run)
+# PID 1 of the guest (written by linmot_st_vcan.uml for one run)
 B={busybox}
 W={work}
 fail() {{ echo "{fail_mark}$*"; $B poweroff -f; }}

@@ -3,7 +3,7 @@ bus at 500 kbit/s, with the command's defaults (realistic drive timings, flash, 
 the drive's slow services (write and verify only); the PLC's cost per scan; and what passing the dataset
 VAR_IN_OUT would cost per scan instead of the 2-word window (the design choice of docs/commissioning.md).
 
-Run: `python -m linmot_st.jobs.commission.bench` (or `make bench`).
+Run: `python -m linmot_st_bench.commission` (or `make bench`).
 """
 
 from __future__ import annotations
@@ -102,7 +102,7 @@ def _scan_us(plc, scans: int = 20_000) -> float:
 
 
 def _commission(axes: int, **kw):
-    from .testing import commission
+    from linmot_st.jobs.commission.testing import commission
     t0 = time.perf_counter()
     o = commission(axes=axes, **kw)
     wall = time.perf_counter() - t0
@@ -114,7 +114,7 @@ def run() -> list[dict]:
     from linmot_st.plc import Plc
     from linmot_st.toolchain import build
 
-    from .testing import project_build
+    from linmot_st.jobs.commission.testing import project_build
 
     out = []
     t0 = time.perf_counter()
@@ -167,7 +167,7 @@ def run() -> list[dict]:
     out += memory_figures(res)
     # VAR_IN_OUT dataset vs the 2-word window, 8 FBs per scan, on each backend available
     from linmot_st.toolchain import builtin_available, matiec_available
-    folder = Path(__file__).resolve().parents[4] / "build" / "bench" / "commission"
+    folder = Path(__file__).resolve().parents[2] / "build" / "bench" / "commission"
     folder.mkdir(parents=True, exist_ok=True)
     for backend, ok in (("matiec", matiec_available()), ("builtin", builtin_available())):
         if not ok:
@@ -272,7 +272,7 @@ def bus_bound_figures(drives=(2, 8, 16, 32), bitrates=(500_000, 1_000_000), task
 
 def fault_matrix_figures(res) -> list[dict]:
     """The fault-injection matrix (faultmatrix.py): its totals against the targets of the reliability issue."""
-    from .faultmatrix import FAMILIES, PHASES, run_matrix, totals
+    from linmot_st.jobs.commission.faultmatrix import FAMILIES, PHASES, run_matrix, totals
     t0 = time.perf_counter()
     cells = run_matrix(build=res)
     wall = time.perf_counter() - t0

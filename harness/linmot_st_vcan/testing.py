@@ -22,7 +22,7 @@ import sys
 import time
 from pathlib import Path
 
-REPO = Path(__file__).resolve().parents[3]
+REPO = Path(__file__).resolve().parents[2]
 BOOT_TIMEOUT_S = 60          # `linmot-st emulate` starting in the guest (imports) and booting (20 ms with --fast)
 STOP_TIMEOUT_S = 30
 

@@ -1,18 +1,18 @@
 """The cost of a cam motion: one emulated E1100 following a master encoder with an encoder cam (modulo mode, one
 cam per revolution of an 8000-count encoder turning at 2 revolutions/s), on a 1 Mbit/s SimBus with a SYNC every
 4 ms and TxPDO2 on every SYNC, as the motion bench (bench.py). The figure is simulated seconds per wall second,
-best of the runs (`make bench`; `python -m linmot_st.emulator.linmot.motion.cam_bench`).
+best of the runs (`make bench`; `python -m linmot_st_bench.emulator_mc_cam`).
 """
 
 from __future__ import annotations
 
 import time
 
-from ..curves import Curve
-from ..master_encoder import ConstantSpeed
-from ....protocol import commands as C
-from ....protocol import upids as U
-from .bench import S, _setup
+from linmot_st.emulator.linmot.curves import Curve
+from linmot_st.emulator.linmot.master_encoder import ConstantSpeed
+from linmot_st.protocol import commands as C
+from linmot_st.protocol import upids as U
+from linmot_st_bench.emulator_mc import S, _setup
 
 SETPOINTS = [0, 100_000, 400_000, 500_000, 400_000, 100_000, 0]    # 0 -> 50 mm -> 0 over one revolution
 
