@@ -26,6 +26,7 @@ demo: $(STAMP)
 
 # st_lib's coverage first, so that the whole suite's summary is the last line CI reads
 test: $(STAMP)
+	$(BIN)/lint-imports --no-cache     # the layers of docs/architecture.md (pyproject.toml [tool.importlinter])
 	$(MAKE) st-coverage
 	$(BIN)/pytest -q -n 2
 
