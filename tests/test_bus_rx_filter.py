@@ -8,7 +8,6 @@ from pathlib import Path
 
 import pytest
 
-import linmot_st.bus as bus_pkg
 from linmot_st.bus import Frame, SimBus
 from linmot_st.bus.nodes import ScriptedNode
 
@@ -105,6 +104,7 @@ def test_the_demo_puts_the_same_frames_on_the_bus_with_and_without_the_drives_fi
     trace, phases and steps are identical to offering every frame to every drive."""
     import dataclasses
 
+    from linmot_st.jobs.commission import runner as runner_mod
     from linmot_st.jobs.commission.runner import RunOptions
     from linmot_st.jobs.commission.testing import project_build
     from linmot_st.jobs.motion.budget import job_budget
@@ -118,7 +118,7 @@ def test_the_demo_puts_the_same_frames_on_the_bus_with_and_without_the_drives_fi
     build = project_build("builtin")
     out = {}
     for filters in (False, True):
-        monkeypatch.setattr(bus_pkg, "SimBus", bus_with(filters))
+        monkeypatch.setattr(runner_mod, "SimBus", bus_with(filters))       # the bus the run makes
         opts = RunOptions(axes=axes, timings="real")
         res = run(pvl, opts, build, after=motion_phase(steps, 60.0, None, inhibit),
                   drive_factory=job_drives(steps, opts))

@@ -26,8 +26,15 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
-from linmot_st.bus import Frame
-from .runner import node_id_table
+from linmot_st.bus import Frame, SimBus
+from .project import MAILBOX
+from linmot_st.cosim import CoSim
+from linmot_st.emulator import DriveTimings
+from linmot_st.emulator.models import make_drive
+from linmot_st.plc import Plc, PlcFault
+from .runner import RunOptions, _configure, node_id_table, phase_name
+from .testing import example, project_build
+from .verify import drive_state, verify
 
 MS = 1_000_000
 S = 1_000_000_000
@@ -325,7 +332,6 @@ class _Watch:
 
 
 def _project():
-    from .testing import project_build
     return project_build()
 
 
@@ -336,14 +342,6 @@ def _baseline_ns(build) -> int:
     """PLC time from switch-on to Done of a run without fault (once per build and process)."""
     key = id(build)
     if key not in _baseline:
-        from linmot_st.bus import SimBus
-        from linmot_st.cosim import CoSim
-        from linmot_st.emulator import DriveTimings
-        from linmot_st.emulator.models import make_drive
-        from linmot_st.plc import Plc
-
-        from .project import MAILBOX
-        from .runner import RunOptions, _configure
         plc, bus = Plc(build), SimBus(500_000)
         drive = make_drive("E1100", NODE, timings=DriveTimings.fast())
         bus.attach(drive, "drive1")
@@ -360,17 +358,6 @@ def _baseline_ns(build) -> int:
 def run_cell(family: str, phase: str, build=None, timings=None) -> Cell:
     """One cell; `timings`: the drive's (default DriveTimings.fast(); a longer boot_ns leaves the drive
     rebooting when run 1 fails)."""
-    from linmot_st.bus import SimBus
-    from linmot_st.cosim import CoSim
-    from linmot_st.emulator import DriveTimings
-    from linmot_st.emulator.models import make_drive
-    from linmot_st.plc import Plc, PlcFault
-
-    from .project import MAILBOX
-    from .runner import RunOptions, _configure, phase_name
-    from .testing import example
-    from .verify import drive_state, verify
-
     cell = Cell(family, phase)
     pvl = example()
     opts = RunOptions(axes=1, reset=True, timings="fast")

@@ -22,7 +22,8 @@ from dataclasses import dataclass
 from decimal import Decimal
 from pathlib import Path
 
-from linmot_st import resources
+from linmot_st import resources, toolchain
+from linmot_st.pvl.to_st import to_st
 
 REPO = resources.CHECKOUT              # examples/ and build/ of a source checkout
 INSTANCE = "CONFIG0.RES0.MAIN"         # the program instance (plc_project/config.st)
@@ -77,8 +78,6 @@ def prepare(pvl, source_name: str | None = None, *, text: str | None = None,
             task_interval_ns: int = TASK_INTERVAL_NS) -> Project:
     """Write (if needed) the entry file commissioning `pvl`, or the dataset file `text` (datasets.py: per-node
     datasets), with the PLC task's interval. Raises DatasetError when it does not fit."""
-    from linmot_st.pvl.to_st import to_st
-
     tree = resources.library_tree()
     plc_project = tree / "plc_project"
     if not (plc_project / "commission.st").exists():
@@ -117,5 +116,4 @@ def _write_if_changed(path: Path, text: str) -> None:
 
 def build_project(project: Project, backend: str = "auto"):
     """The toolchain's BuildResult (cached by content)."""
-    from linmot_st.toolchain import build
-    return build(str(project.entry), backend=backend, root=project.root)
+    return toolchain.build(str(project.entry), backend=backend, root=project.root)   # toolchain.build: tests replace it

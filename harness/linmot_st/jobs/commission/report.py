@@ -20,9 +20,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from linmot_st.bus.bits import bus_bits, unstuffed_bus_bits
+from linmot_st.bus.stats import bus_stats
+from linmot_st.bus.trace import write_trace
 from linmot_st.protocol.errors import describe
+from linmot_st.pvl import LAYERS
 from linmot_st.pvl.dataset import Dataset, expected_exchanges
-from .plots import ReadBack, curve_read_backs
+from .plots import ReadBack, curve_read_backs, plot_curve
 from .runner import RunResult
 from .verify import Verification
 
@@ -228,7 +231,6 @@ class Report:
         return groups
 
     def _busy_ns(self, t0: int, t1: int) -> int:
-        from linmot_st.bus.stats import bus_stats
         return bus_stats(self.run.trace, self.run.bit_ns, t0, t1).busy_ns
 
     # ------------------------------------------------------------------ words
@@ -269,7 +271,6 @@ class Report:
         """FailItem in words, as FailKind says what it is (the PLC's FB_LmCommission output)."""
         kind, item, step, verifying = ax.fail_kind, ax.fail_item, ax.fail_step, ax.fail_phase == "verify"
         if kind == "layer":
-            from linmot_st.pvl import LAYERS
             return f"layer {item} ({LAYERS[item].name})" if item in LAYERS else f"layer {item}"
         if kind == "param":
             caption = next((p.caption for o in self._group_of(ax.node_id).pvl.parameter_objects for p in o.parameters
@@ -474,10 +475,6 @@ class Report:
     def write(self, folder: Path, trace_format: str = "log") -> dict:
         """The report folder: report.md, report.json, can.<format>, curve_<id>.png. Curve plots and traces
         of an earlier report in the same folder are removed first (they would not belong to this run)."""
-        from linmot_st.bus.trace import write_trace
-
-        from .plots import plot_curve
-
         folder = Path(folder)
         folder.mkdir(exist_ok=True)            # the folder named, not its parents
         for old in [*folder.glob("curve_*.png"), *(folder / f"can.{x}" for x in ("log", "asc", "blf"))]:

@@ -15,13 +15,24 @@ from __future__ import annotations
 
 import functools
 
+import os
 import time
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
-from linmot_st.cosim import IdlePredicate
+from linmot_st.bus import Frame, SimBus, frame_length_bits, open_bus
+from linmot_st.bus.bits import max_bus_bits
+from linmot_st.bus.pycan import OwnFrames, parse_bus_spec
+from linmot_st.bus.stats import BusStats, bus_stats
+from linmot_st.cosim import CoSim, CoSimTimeout, IdlePredicate, RealTimeCoSim
+from linmot_st.emulator import DriveTimings
+from linmot_st.emulator.models import make_drive
+from linmot_st.plc import Plc, PlcFault
+from linmot_st.pvl.dataset import expected_exchanges, from_pvl
 
+from .datasets import Datasets, Source, check_drive_type, drive_series
 from .project import INSTANCE, MAILBOX, MAX_AXES
+from .verify import drive_state
 
 PHASES = ("idle", "wait", "start", "check", "compare", "preflight", "params", "curves", "ct", "flash", "reset", "verify", "done")
 
@@ -43,7 +54,6 @@ def check_bus_spec(spec: str) -> None:
     whether the bus exists is known only when it is opened."""
     if spec == "sim":
         return
-    from linmot_st.bus.pycan import parse_bus_spec
 
     parse_bus_spec(spec, where=f"--bus {spec!r}", forms="sim, virtual[:CHANNEL], or INTERFACE:CHANNEL")
 
@@ -154,7 +164,7 @@ class TraceRecord:
     start_ns: int
     end_ns: int
     sender: str
-    frame: Any
+    frame: Frame
     status: str = "ok"
 
 
@@ -175,7 +185,7 @@ class RunResult:
     overruns: int = 0
     max_lateness_ns: int = 0
     skipped_ticks: int = 0                     # real time: task activations late scans missed (cosim.py)
-    stats: Any = None                          # BusStats over the commissioning span
+    stats: BusStats | None = None              # over the commissioning span
     before: dict = field(default_factory=dict)  # node ID -> verify.drive_state() when switched on
     wear_before: dict = field(default_factory=dict)  # node ID -> drive_wear() when switched on
     wear_after: dict = field(default_factory=dict)   # and at the end of the run
@@ -183,7 +193,7 @@ class RunResult:
     ram_commissioned: dict = field(default_factory=dict)  # node -> {UPID: RAM} before run(after=...): what
                                                # the commissioning left, for the verification (a move's
                                                # live parameter writes come later)
-    datasets: Any = None                       # datasets.Datasets: each node's PVL and dataset
+    datasets: Datasets | None = None           # each node's PVL and dataset
 
     @property
     def t_start_ns(self) -> int:
@@ -339,7 +349,6 @@ def _curve_memory(opts: RunOptions, drives: dict) -> int:
 
 def default_timeout_s(dataset, opts: RunOptions) -> float:
     """Generous: 4 ms per expected exchange, plus the drives' slow services (boot, MC start, flash, reset)."""
-    from linmot_st.pvl.dataset import expected_exchanges
     n = expected_exchanges(dataset, verify=opts.verify, flash=opts.flash, preflight=opts.preflight)
     return 4e-3 * n + 60.0
 
@@ -348,8 +357,6 @@ def run_timeout_s(datasets, nodes: list[int], opts: RunOptions) -> float:
     """The slowest axis' default_timeout_s, plus 4 x the bus time every axis' exchanges need at the
     worst-case frame length (135 bits): the axes share one bus, so 32 of them take about 32 x one axis'
     bus time."""
-    from linmot_st.bus.bits import max_bus_bits
-    from linmot_st.pvl.dataset import expected_exchanges
     slowest = max(default_timeout_s(datasets.of(n).dataset, opts) for n in nodes)
     exchanges = sum(expected_exchanges(datasets.of(n).dataset, verify=opts.verify, flash=opts.flash,
                                        preflight=opts.preflight) for n in nodes)
@@ -368,8 +375,6 @@ def drive_model_of(node_id: int, opts: RunOptions, datasets=None) -> str:
 def emulated_drive(node_id: int, opts: RunOptions, datasets=None, motion=None):
     """An emulated drive for this run, of drive_model_of(); `motion`: its MotionSettings (the motion job places
     the mechanics)."""
-    from linmot_st.emulator import DriveTimings
-    from linmot_st.emulator.models import make_drive
     timings = DriveTimings.fast() if opts.timing_kind() == "fast" else DriveTimings()
     return make_drive(drive_model_of(node_id, opts, datasets), node_id, timings=timings, motion=motion)
 
@@ -384,13 +389,8 @@ def run(pvl, opts: RunOptions, build_result, *, dataset=None, datasets=None, pro
     `after(plc, cosim, drives)` runs once every axis is commissioned, on the same PLC, bus and drives, before
     they are shut down (the motion job: linmot_st.jobs.motion); its result is RunResult.after. `datasets`
     (datasets.Datasets, built with this PLC's dataset file) gives nodes datasets of their own."""
-    from linmot_st.plc import Plc
-
-    from .datasets import Datasets, Source
-
     nodes = opts.nodes()
     if datasets is None:
-        from linmot_st.pvl.dataset import from_pvl
         datasets = Datasets(Source(pvl, dataset or from_pvl(pvl), getattr(pvl, "filename", None) or "PVL"))
     timeout_s = opts.timeout_s or run_timeout_s(datasets, nodes, opts)
     plc = Plc(build_result)
@@ -416,8 +416,6 @@ def _ram_of(drives: dict) -> dict:
 def _checked_factory(factory, datasets):
     """The drive factory, refusing a drive whose series is not what its node's PVL file is for (before the
     drive is powered on, so before the PLC sends it anything)."""
-    from .datasets import check_drive_type, drive_series
-
     def make(node: int):
         drive = factory(node)
         check_drive_type(node, datasets.of(node), drive_series(drive))
@@ -426,11 +424,6 @@ def _checked_factory(factory, datasets):
 
 
 def _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, timeout_s, after, bases) -> RunResult:
-    from linmot_st.bus import SimBus
-    from linmot_st.cosim import CoSim, CoSimTimeout
-
-    from .verify import drive_state
-
     bus = SimBus(opts.bitrate)
     drives = {}
     for n in nodes:
@@ -447,7 +440,6 @@ def _run_sim(plc, opts, nodes, factory, prepare_bus, prepare_plc, progress, time
     if prepare_plc:
         prepare_plc(plc)
     sampler = Sampler(plc, nodes, progress)
-    from linmot_st.plc import PlcFault
     wall0 = time.perf_counter()
     timed_out, fault, interrupted = False, "", False
     try:
@@ -476,14 +468,11 @@ class _RecordingBus:
     """A python-can Bus wrapper that keeps every frame the PLC sends or receives (the run's trace)."""
 
     def __init__(self, bus, t0: int, bit_ns: int, echo: bool = False) -> None:
-        from linmot_st.bus.pycan import OwnFrames
-
         self.bus, self.t0, self.bit_ns = bus, t0, bit_ns
         self.records: list[TraceRecord] = []
         self._own = OwnFrames() if echo else None      # echo: the bus returns the PLC's own frames
 
     def _record(self, msg, sender: str) -> None:
-        from linmot_st.bus import Frame, frame_length_bits
         frame = Frame.from_message(msg)
         end = time.monotonic_ns() - self.t0
         self.records.append(TraceRecord(end - frame_length_bits(frame) * self.bit_ns, end, sender, frame))
@@ -503,14 +492,6 @@ class _RecordingBus:
 
 
 def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s, after, bases) -> RunResult:
-    import os
-
-    from linmot_st.bus import open_bus
-    from linmot_st.bus.stats import bus_stats
-    from linmot_st.cosim import CoSimTimeout, RealTimeCoSim
-
-    from .verify import drive_state
-
     spec = opts.bus
     if spec == "virtual":
         spec = f"virtual:linmot-st-commission-{os.getpid()}"
@@ -548,7 +529,6 @@ def _run_realtime(plc, opts, nodes, factory, prepare_plc, progress, timeout_s, a
             prepare_plc(plc)
         sampler = Sampler(plc, nodes, progress)
         plc_bus.t0 = time.monotonic_ns()                 # trace times = PLC times
-        from linmot_st.plc import PlcFault
         wall0 = time.perf_counter()
         timed_out, fault, interrupted = False, "", False
         try:

@@ -8,7 +8,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from linmot_st.pvl import PvlFile, load_pvl
+from linmot_st.pvl.dataset import from_pvl
+
 from .project import REPO, TASK_INTERVAL_NS, build_project, parse_task_interval, prepare
+from .report import Context, Report
+from .runner import RunOptions, RunResult, run
+from .verify import Verification, verify_run
 
 EXAMPLE = REPO / "examples" / "two_axes.pvl"
 _builds: dict[str, Any] = {}
@@ -17,7 +23,6 @@ _builds: dict[str, Any] = {}
 
 
 def example():
-    from linmot_st.pvl import load_pvl
     return load_pvl(EXAMPLE)
 
 
@@ -42,10 +47,10 @@ def task_interval_ns(task_interval: str | int | None) -> int:
 
 @dataclass
 class Outcome:
-    pvl: Any
-    result: Any
-    verification: Any
-    report: Any
+    pvl: PvlFile
+    result: RunResult
+    verification: Verification
+    report: Report
 
     def axis(self, node: int = 1):
         return next(a for a in self.result.axes if a.node_id == node)
@@ -56,11 +61,6 @@ def commission(backend: str = "auto", pvl=None, **kw) -> Outcome:
     fields (timings default "fast", reset default False, force default True: the full write, whose exchanges
     the tests count; the re-commissioning tests pass force=False), task_interval (project_build), and run()'s
     hooks drive_factory, prepare_bus, prepare_plc."""
-    from linmot_st.pvl.dataset import from_pvl
-    from .report import Context, Report
-    from .runner import RunOptions, run
-    from .verify import verify_run
-
     pvl = pvl or example()
     hooks = {k: kw.pop(k) for k in ("drive_factory", "prepare_bus", "prepare_plc", "progress") if k in kw}
     kw.setdefault("timings", "fast")

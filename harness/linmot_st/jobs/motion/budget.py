@@ -20,10 +20,12 @@ Rates are kept in millihertz (integers), so that ST (UDINT) and Python compute t
 from __future__ import annotations
 
 import json
+from bisect import bisect_left
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 from linmot_st.bus.bits import max_bus_bits
+from linmot_st.bus.stats import bus_stats
 
 EVENT, SYNC = "event", "sync"
 VECTORS = Path(__file__).resolve().parents[4] / "tests" / "vectors" / "pdo_budget.json"
@@ -126,10 +128,6 @@ def job_budget(axes: int, bitrate: int, share_percent: float = 70.0) -> tuple[Bu
 def measured_load(trace, bit_ns: int, t0_ns: int, t1_ns: int, window_ns: int = 100_000_000) -> tuple[float, float]:
     """What the bus carried in [t0, t1) (the motion job's phase): the mean load and the highest load of any
     window of window_ns (a planned load is a rate; a short burst is what overloads a bus)."""
-    from bisect import bisect_left
-
-    from linmot_st.bus.stats import bus_stats
-
     if t1_ns <= t0_ns:
         return 0.0, 0.0
     starts = [e.start_ns for e in trace]

@@ -18,6 +18,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from linmot_st.emulator import E1100Drive
+from linmot_st.emulator.linmot.motion import MotionSettings
 from linmot_st.protocol.upids import (P_HOME_POSITION, P_HOMING_MODE, P_INITIAL_POSITION, P_LIMIT_NEGATIVE,
                                       P_LIMIT_POSITIVE, P_LIMITS_ENABLE)
 
@@ -56,7 +58,6 @@ class Stroke:
 
     def settings(self, base=None):
         """The emulated drive's MotionSettings with this power-on position."""
-        from linmot_st.emulator.linmot.motion import MotionSettings
         return (base or MotionSettings()).with_(start_position_pu=self.start_position_pu)
 
     def store_home(self, drive) -> None:
@@ -78,7 +79,6 @@ def _value(pvl, defaults, upid: int) -> tuple[int, bool]:
 
 def drive_defaults():
     """The emulated drive's default of a parameter (its ROM value as delivered)."""
-    from linmot_st.emulator import E1100Drive
     params = E1100Drive(1).params
 
     def value(upid: int) -> int:
@@ -90,7 +90,6 @@ def drive_defaults():
 def fit(pvl, spans: list[tuple[int, str, float, float]], settings=None, defaults=None) -> Stroke:
     """Place the emulated mechanics for steps visiting `spans` (step number, label, lowest mm, highest mm;
     the home step not among them: it is where the stroke is fixed)."""
-    from linmot_st.emulator.linmot.motion import MotionSettings
     s = settings or MotionSettings()
     defaults = defaults or drive_defaults()
     length = (s.stop_positive_pu - s.stop_negative_pu) / MM
