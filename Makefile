@@ -35,6 +35,7 @@ test: $(STAMP)
 lint: $(STAMP)
 	$(BIN)/ruff check .
 	$(BIN)/mypy
+	$(BIN)/lint-imports --no-cache     # the layers of docs/architecture.md (pyproject.toml [tool.importlinter])
 
 # st_lib's line and branch coverage: the table per file, build/st-coverage/{coverage.xml,html/index.html}
 st-coverage: $(STAMP)
@@ -42,7 +43,7 @@ st-coverage: $(STAMP)
 	  -o linmot_st_cov_pous=false $(ST_COVERAGE_TESTS)
 
 bench: $(STAMP)
-	$(BIN)/python -m linmot_st.bench
+	$(BIN)/python -m linmot_st_bench
 
 clean:
 	rm -rf build .pytest_cache

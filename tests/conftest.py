@@ -1,9 +1,9 @@
-"""Suite-wide pytest setup: the `socketcan` tests run on a real SocketCAN stack (linmot_st.vcan.pytest_plugin);
+"""Suite-wide pytest setup: the `socketcan` tests run on a real SocketCAN stack (linmot_st_vcan.pytest_plugin);
 the fixtures tests of several folders share. A folder's own fixtures are in its conftest.py."""
 
 import pytest
 
-pytest_plugins = ["linmot_st.vcan.pytest_plugin", "pytester"]
+pytest_plugins = ["linmot_st_vcan.pytest_plugin", "pytester"]
 
 
 @pytest.fixture(scope="session")

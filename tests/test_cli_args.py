@@ -7,7 +7,7 @@ from __future__ import annotations
 import pytest
 
 from linmot_st.cli import main
-from linmot_st.commission.testing import EXAMPLE
+from linmot_st.jobs.commission.testing import EXAMPLE
 
 
 def run_cli(capsys, *args: str) -> tuple[int, str]:

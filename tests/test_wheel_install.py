@@ -82,6 +82,10 @@ def test_the_wheel_carries_the_library_the_project_and_the_template(installed):
             if f.is_file() and "__pycache__" not in f.parts and ".pytest_cache" not in f.parts:
                 assert f"linmot_st/{f.relative_to(REPO).as_posix()}" in names, f
     assert "linmot_st/plctest/plugin.py" in names
+    # the benches and the SocketCAN test environment are development code: not in the wheel (issue 26)
+    dev = sorted(n for n in names if n.endswith(".py") and (n.split("/")[0] in ("linmot_st_bench", "linmot_st_vcan")
+                                                             or "bench" in n.rsplit("/", 1)[-1] or "/vcan/" in n))
+    assert dev == []
 
 
 def test_every_command_works_from_an_empty_folder(installed, tmp_path):

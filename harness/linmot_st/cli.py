@@ -16,11 +16,11 @@ SUBCOMMAND_MODULES = [
     "linmot_st.toolchain.cli",     # build, run
     "linmot_st.emulator.cli",      # emulate
     "linmot_st.pvl.cli",           # pvl show, pvl to-st
-    "linmot_st.commission.cli",    # commission
-    "linmot_st.motion.cli",        # motion
+    "linmot_st.jobs.commission.cli",    # commission
+    "linmot_st.jobs.motion.cli",        # motion
     "linmot_st.export.cli",        # export st, export plcopen
     "linmot_st.userproject.cli",   # init
-    "linmot_st.bench",             # bench
+    "linmot_st_bench.runner",      # bench (a checkout only: the benches are not in the wheel)
 ]
 
 

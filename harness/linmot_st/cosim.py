@@ -27,10 +27,15 @@ attribute accesses plus the PLC step.
 from __future__ import annotations
 
 import time
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Any, Callable
 
 from linmot_st.bus.frame import Frame
 from linmot_st.bus.pycan import OwnFrames
+from linmot_st.bus.sim import SimBus
+from linmot_st.plc import IdleWatch, Plc
+
+if TYPE_CHECKING:
+    import can
 
 MAILBOX_FRAMES = 32   # T_CanFrames : ARRAY[1..32] OF T_CanFrame
 
@@ -51,7 +56,7 @@ class CoSimTimeout(TimeoutError):
 class Mailbox:
     """Bound accessors of one T_CanMailbox variable of a PLC (RxCount, Rx, RxLost, TxCount, Tx, TxLost)."""
 
-    def __init__(self, plc: Any, path: str) -> None:
+    def __init__(self, plc: Plc, path: str) -> None:
         self.plc = plc
         self.path = path
         try:
@@ -181,9 +186,7 @@ class IdlePredicate:
     counter of its calls would hold (the predicate is called before each scan and after the last): the
     scans run so far inside a call, one more after it."""
 
-    def __init__(self, plc: Any, watched: list) -> None:
-        from linmot_st.plc import IdleWatch
-
+    def __init__(self, plc: Plc, watched: list) -> None:
         self.plc = plc
         self.idle_watch = IdleWatch(watched) if hasattr(plc, "step_idle") else None
         self._scan0 = plc.scan_count
@@ -206,7 +209,7 @@ class CoSim:
     """A PLC stepped scan by scan against a SimBus; the PLC is the bus endpoint named `name`. `echo`
     (default: when the mailbox type has the field) gives the PLC the echo of its transmitted frames."""
 
-    def __init__(self, plc: Any, bus: Any, mailbox: str = "CONFIG0.RES0.CAN0", name: str = "plc",
+    def __init__(self, plc: Plc, bus: SimBus, mailbox: str = "CONFIG0.RES0.CAN0", name: str = "plc",
                  echo: bool | None = None, fast_idle: bool = True) -> None:
         self.plc = plc
         self.bus = bus
@@ -339,7 +342,7 @@ class RealTimeCoSim:
     frames; beyond that they are lost and counted in RxLost): a stalled PLC sees every frame, late.
     """
 
-    def __init__(self, plc: Any, can_bus: Any, mailbox: str = "CONFIG0.RES0.CAN0", *,
+    def __init__(self, plc: Plc, can_bus: can.BusABC, mailbox: str = "CONFIG0.RES0.CAN0", *,
                  clock: Callable[[], int] = time.monotonic_ns, echo: bool = False, rx_queue: int = 1024) -> None:
         self.plc = plc
         self.rx_queue = rx_queue      # frames the driver holds beyond the 32 of one scan (a CAN driver's FIFO)

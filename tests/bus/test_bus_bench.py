@@ -3,7 +3,7 @@
 import pytest
 
 from linmot_st.bus import Frame
-from linmot_st.bus.bench import EchoSdoServer, RequestLoop, run_loop
+from linmot_st_bench.bus import EchoSdoServer, RequestLoop, run_loop
 from linmot_st.emulator import E1100Drive
 
 READ = Frame(0x601, bytes.fromhex("40 A2 33 01 00 00 00 00"))
@@ -29,7 +29,7 @@ def test_a_broken_loop_is_an_error():
 
 
 def test_emulator_bench_reports_the_best_run_and_the_load(monkeypatch):
-    from linmot_st.emulator import bench
+    from linmot_st_bench import emulator as bench
 
     rates = iter([30_000.0, 70_000.0, 50_000.0, 20_000.0, 60_000.0])
     monkeypatch.setattr(bench, "measure_bus_exchanges", lambda: next(rates))

@@ -114,7 +114,7 @@ def test_socketcan_vcan0():
 
 def test_parse_bus_spec_is_the_rule_open_bus_and_commission_share():
     from linmot_st.bus import parse_bus_spec
-    from linmot_st.commission.runner import check_bus_spec
+    from linmot_st.jobs.commission.runner import check_bus_spec
 
     assert parse_bus_spec("virtual") == ("virtual", "linmot-st")
     assert parse_bus_spec("Virtual:run1") == ("virtual", "run1")

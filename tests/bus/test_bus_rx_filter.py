@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import pytest
 
-import linmot_st.bus as bus_pkg
 from linmot_st.bus import Frame, SimBus
 from linmot_st.bus.nodes import ScriptedNode
 from repo_paths import REPO
@@ -104,11 +103,12 @@ def test_the_demo_puts_the_same_frames_on_the_bus_with_and_without_the_drives_fi
     trace, phases and steps are identical to offering every frame to every drive."""
     import dataclasses
 
-    from linmot_st.commission.runner import RunOptions
-    from linmot_st.commission.testing import project_build
-    from linmot_st.motion.budget import job_budget
-    from linmot_st.motion.job import job_drives, motion_phase, run
-    from linmot_st.motion.plan import plan as make_plan
+    from linmot_st.jobs.commission import runner as runner_mod
+    from linmot_st.jobs.commission.runner import RunOptions
+    from linmot_st.jobs.commission.testing import project_build
+    from linmot_st.jobs.motion.budget import job_budget
+    from linmot_st.jobs.motion.job import job_drives, motion_phase, run
+    from linmot_st.jobs.motion.plan import plan as make_plan
     from linmot_st.pvl import load_pvl
 
     pvl = load_pvl(REPO / "examples" / "two_axes.pvl")
@@ -117,7 +117,7 @@ def test_the_demo_puts_the_same_frames_on_the_bus_with_and_without_the_drives_fi
     build = project_build("builtin")
     out = {}
     for filters in (False, True):
-        monkeypatch.setattr(bus_pkg, "SimBus", bus_with(filters))
+        monkeypatch.setattr(runner_mod, "SimBus", bus_with(filters))       # the bus the run makes
         opts = RunOptions(axes=axes, timings="real")
         res = run(pvl, opts, build, after=motion_phase(steps, 60.0, None, inhibit),
                   drive_factory=job_drives(steps, opts))
@@ -135,7 +135,7 @@ def test_the_demo_puts_the_same_frames_on_the_bus_with_and_without_the_drives_fi
 def test_the_motion_bench_with_sync_is_the_same_with_and_without_the_drives_filters(monkeypatch):
     """Three drives moving with TxPDO2 on every SYNC (the emulator's bench scenario): SYNC, the RxPDOs and the
     other drives' frames, with the filters and without, give the same trace and trajectories."""
-    from linmot_st.emulator.linmot.motion import bench
+    from linmot_st_bench import emulator_mc as bench
 
     out = {}
     for filters in (False, True):

@@ -7,7 +7,7 @@ import uuid
 import pytest
 
 from linmot_st.bus import Frame, NodeServer, SimBus, open_bus
-from linmot_st.bus.bench import ECHO_ST
+from linmot_st_bench.bus import ECHO_ST
 from linmot_st.bus.nodes import ScriptedNode
 from linmot_st.cosim import CoSim, RealTimeCoSim
 from repo_paths import REPO

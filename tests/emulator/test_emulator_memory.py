@@ -12,8 +12,8 @@ import pytest
 
 from linmot_st.bus import Frame, NodeServer, open_bus
 from linmot_st.cli import main
-from linmot_st.commission.testing import commission
-from linmot_st.commission.verify import drive_state
+from linmot_st.jobs.commission.testing import commission
+from linmot_st.jobs.commission.verify import drive_state
 from linmot_st.emulator import OPERATIONAL, DriveTimings, E1100Drive
 from linmot_st.emulator.linmot.memory import FORMAT, dump, load, read, write
 from linmot_st.emulator.testing import DirectLink

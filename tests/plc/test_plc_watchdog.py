@@ -132,7 +132,7 @@ def test_ctrl_c_stops_a_commissioning_with_the_report_of_what_was_done(tmp_path)
     """On python-can's virtual bus in real time (realistic drive timings: the flash phase takes seconds),
     Ctrl-C once the parameters are written: the drives' threads stop, the report of the phases done so far
     is printed and written, exit status 130."""
-    from linmot_st.commission.testing import EXAMPLE
+    from linmot_st.jobs.commission.testing import EXAMPLE
     report = tmp_path / "report"
     proc = _cli("commission", str(EXAMPLE), "--bus", "virtual", "--drive-timings", "real", "--report", str(report))
     try:

@@ -12,7 +12,8 @@ import lxml.html
 from lxml import etree
 
 from linmot_st.plc import Plc
-from linmot_st.stcov import arms, collect, report
+from linmot_st.plc import coverage as collect
+from linmot_st.stcov import arms, report
 from linmot_st.toolchain import build
 from linmot_st.toolchain.testing import BACKEND_PARAMS, requires_matiec, write_st
 

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from linmot_st.bench import verdict
+from linmot_st_bench.runner import verdict
 from linmot_st.cli import main
 from linmot_st.toolchain.testing import BACKEND_PARAMS, write_st
 

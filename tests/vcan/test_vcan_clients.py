@@ -1,6 +1,6 @@
 """Independent clients against `linmot-st emulate` on a real Linux SocketCAN stack (vcan0): python canopen's
 SDO client and PDO support, and can-utils (cansend, candump, cangen). Run inside a User-Mode Linux guest
-where this kernel has no vcan0 (linmot_st.vcan.pytest_plugin); docs/bus.md, "A real SocketCAN stack"."""
+where this kernel has no vcan0 (linmot_st_vcan.pytest_plugin); docs/bus.md, "A real SocketCAN stack"."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ import pytest
 from shared_vectors import load
 
 from linmot_st.emulator.cia301.eds import SHIPPED_EDS
-from linmot_st.vcan.testing import Candump, EmulatedDrives, can_utility
+from linmot_st_vcan.testing import Candump, EmulatedDrives, can_utility
 
 pytestmark = pytest.mark.socketcan
 
@@ -120,11 +120,11 @@ def test_bad_traffic_from_cangen_crashes_neither_the_drive_nor_the_plc(tmp_path)
     # where and why; the drive keeps serving; nothing raises; a PASSED run holds the dataset
     import re
 
-    from linmot_st.commission.runner import RunOptions
-    from linmot_st.commission.testing import EXAMPLE, example
-    from linmot_st.commission.verify import verify
+    from linmot_st.jobs.commission.runner import RunOptions
+    from linmot_st.jobs.commission.testing import EXAMPLE, example
+    from linmot_st.jobs.commission.verify import verify
     from linmot_st.emulator.testing import RawSdoClient
-    from linmot_st.vcan.testing import linmot_st
+    from linmot_st_vcan.testing import linmot_st
 
     cangen = can_utility("cangen")
     with EmulatedDrives([1], tmp_path) as drives:

@@ -1,16 +1,16 @@
 """The commissioning over a real Linux SocketCAN stack (vcan0): the emulated drive served by `linmot-st emulate`
 in one process, the PLC in another (`linmot-st commission --bus socketcan:vcan0 --no-emulate`), can-utils'
 candump recording the bus. Run inside a User-Mode Linux guest where this kernel has no vcan0
-(linmot_st.vcan.pytest_plugin); docs/bus.md, "A real SocketCAN stack"."""
+(linmot_st_vcan.pytest_plugin); docs/bus.md, "A real SocketCAN stack"."""
 
 from __future__ import annotations
 
 import pytest
 
-from linmot_st.commission.runner import RunOptions
-from linmot_st.commission.testing import EXAMPLE, commission, example
-from linmot_st.commission.verify import drive_state, verify
-from linmot_st.vcan.testing import Candump, EmulatedDrives, linmot_st, sdo_frames, without_busy_polls
+from linmot_st.jobs.commission.runner import RunOptions
+from linmot_st.jobs.commission.testing import EXAMPLE, commission, example
+from linmot_st.jobs.commission.verify import drive_state, verify
+from linmot_st_vcan.testing import Candump, EmulatedDrives, linmot_st, sdo_frames, without_busy_polls
 
 pytestmark = pytest.mark.socketcan
 

@@ -1,7 +1,7 @@
 """A triggered move on a real Linux SocketCAN stack (vcan0): `linmot-st emulate` with an input signal
 (--signal, a rising edge on the trigger input X4.6) and a profile with a motor and trigger mode direct; the
 test is the CANopen master with raw python-can frames. Runs inside the User-Mode Linux guest
-(linmot_st.vcan.pytest_plugin; docs/bus.md "A real SocketCAN stack"); skips where there is none."""
+(linmot_st_vcan.pytest_plugin; docs/bus.md "A real SocketCAN stack"); skips where there is none."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ import can
 import pytest
 
 from linmot_st.emulator.linmot.profile import DEFAULT_PROFILE
-from linmot_st.vcan.testing import EmulatedDrives
+from linmot_st_vcan.testing import EmulatedDrives
 
 pytestmark = pytest.mark.socketcan
 

@@ -1,4 +1,4 @@
-"""The runner of the SocketCAN test environment (linmot_st.vcan): a command run in a User-Mode Linux guest with
+"""The runner of the SocketCAN test environment (linmot_st_vcan): a command run in a User-Mode Linux guest with
 vcan0 and vcan1, its exit status, output and kernel log; what happens where the tools cannot be fetched."""
 
 from __future__ import annotations
@@ -11,8 +11,8 @@ from pathlib import Path
 
 import pytest
 
-from linmot_st.vcan import GuestStartError, Machine, Unavailable, ensure, native
-from linmot_st.vcan.fetch import Tools
+from linmot_st_vcan import GuestStartError, Machine, Unavailable, ensure, native
+from linmot_st_vcan.fetch import Tools
 
 
 @pytest.fixture(scope="module")
@@ -63,7 +63,7 @@ def test_the_command_is_stopped_at_its_timeout(tools, tmp_path):
 
 
 def test_a_kernel_panic_before_init_is_named_with_the_kernels_line():
-    from linmot_st.vcan.uml import _panic
+    from linmot_st_vcan.uml import _panic
     log = ("Run /tmp/x/init as init process\nuserspace - ptrace set fp regs failed, errno = 14\n"
            "Kernel panic - not syncing: Attempted to kill init! exitcode=0x0000000b\n Stack:\n")
     assert _panic(log) == ("the kernel cannot run on this host: userspace - ptrace set fp regs failed, errno = 14"
@@ -94,7 +94,7 @@ def test_socketcan_tests_skip_with_the_reason_where_the_tools_cannot_be_fetched(
     env = dict(os.environ, PATH=f"{fake}:{os.environ['PATH']}", LINMOT_ST_VCAN_CACHE=str(tmp_path / "cache"),
                COLUMNS="300")
     env.pop("LINMOT_ST_VCAN", None)
-    res = subprocess.run([sys.executable, "-m", "pytest", "-p", "linmot_st.vcan.pytest_plugin", "-p", "no:cacheprovider",
+    res = subprocess.run([sys.executable, "-m", "pytest", "-p", "linmot_st_vcan.pytest_plugin", "-p", "no:cacheprovider",
                           "-rs", "-o", "markers=socketcan", "test_x.py"], cwd=tmp_path, env=env, capture_output=True,
                          text=True, timeout=120)
     assert res.returncode == 0 and "1 skipped" in res.stdout, res.stdout + res.stderr

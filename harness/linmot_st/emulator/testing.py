@@ -9,8 +9,11 @@ from __future__ import annotations
 
 import heapq
 import itertools
+import time
+import uuid
 
 from ..bus.frame import Frame
+from ..protocol.commands import encode
 
 S = 1_000_000_000
 
@@ -129,8 +132,6 @@ class RawSdoClient:
         return self._recv(predicate, timeout_s, keep_others=False)
 
     def _recv(self, predicate, timeout_s: float | None, keep_others: bool):
-        import time
-
         deadline = time.monotonic() + (self.timeout_s if timeout_s is None else timeout_s)
         while True:
             left = deadline - time.monotonic()
@@ -154,8 +155,6 @@ class ServedDrive:
     """
 
     def __init__(self, drive, channel: str | None = None, boot_timeout_s: float = 10.0):
-        import uuid
-
         self.drive = drive
         self.channel = channel or f"linmot-st-{uuid.uuid4().hex[:12]}"
         self.boot_timeout_s = boot_timeout_s
@@ -234,8 +233,6 @@ class MotionLink(DirectLink):
         """RxPDO2 (header + par bytes 0..5) and RxPDO3 (slave header + par bytes 6..7, 6..9 or 6..11 as the
         drive's RxPDO3 mapping 2041h says) of a command with the next count (1..15, 0 skipped as LinMot's own
         demo does)."""
-        from ..protocol.commands import encode
-
         self.count = self.count % 15 + 1
         raw = encode(cid, self.count, **fields).ljust(14, b"\0")
         par_end = {0: 10, 1: 12, 2: 14}.get(self.node.pdo.rx3_mode, 10)

@@ -20,6 +20,10 @@ from pathlib import Path
 from linmot_st import resources
 from linmot_st.toolchain import sources as _sources
 from linmot_st.toolchain.builtin import ast as A
+from linmot_st.toolchain.builtin.checker import Checker
+from linmot_st.toolchain.builtin.errors import BuiltinCompileError
+from linmot_st.toolchain.builtin.loader import load, read_source
+from linmot_st.toolchain.builtin.parser import tokens   # the compiler's own lexer
 
 END_KEYWORDS = {"FUNCTION": "END_FUNCTION", "FUNCTION_BLOCK": "END_FUNCTION_BLOCK", "PROGRAM": "END_PROGRAM"}
 
@@ -85,9 +89,6 @@ def default_entry(cwd: Path | None = None) -> Path:
 
 def read_library(entry: str | Path | None = None, check: bool = True) -> Library:
     """Load, check and index an ST entry file and its includes. Raises ExportError."""
-    from linmot_st.toolchain.builtin.errors import BuiltinCompileError
-    from linmot_st.toolchain.builtin.loader import load, read_source
-
     try:
         path = _sources.resolve_entry(entry if entry is not None else default_entry())
     except _sources.SourceError as exc:
@@ -97,7 +98,6 @@ def read_library(entry: str | Path | None = None, check: bool = True) -> Library
     try:
         elements, files, names = load(path, root, search)
         if check:
-            from linmot_st.toolchain.builtin.checker import Checker
             Checker().check(elements, names)
     except BuiltinCompileError as exc:
         raise ExportError(f"{names_or(path, root)} does not compile:\n{exc}") from None
@@ -182,7 +182,6 @@ class _FileIndex:
     """One source file's tokens (the compiler's lexer, comments kept), addressable by line and column."""
 
     def __init__(self, text: str):
-        from linmot_st.toolchain.builtin.parser import tokens   # the compiler's own lexer
         self.text = text
         self.tokens = tokens(text)
         self._starts = [(t.line, t.column) for t in self.tokens]

@@ -24,6 +24,7 @@ from linmot_st.toolchain.builtin import ast as A
 from linmot_st.toolchain.builtin import types as T
 
 from .library import ExportError, Library, read_library
+from .st import package_version, sources_digest
 
 NS = "http://www.plcopen.org/xml/tc6_0201"
 XHTML = "http://www.w3.org/1999/xhtml"
@@ -259,8 +260,6 @@ def _reorder(el, order: list[str]) -> None:
 # ------------------------------------------------------------------------------------- document
 
 def build_tree(lib: Library, plaintext_interfaces: bool = True) -> etree._ElementTree:
-    from .st import package_version, sources_digest
-
     w = _Writer(lib, plaintext_interfaces)
     now = timestamp()
     project = etree.Element(_q("project"), nsmap=NSMAP)

@@ -11,9 +11,15 @@ from __future__ import annotations
 
 import hashlib
 from dataclasses import dataclass
+from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
 from linmot_st.toolchain.builtin import ast as A
+from linmot_st.toolchain.builtin.checker import Checker
+from linmot_st.toolchain.builtin.errors import BuiltinCompileError
+from linmot_st.toolchain.builtin.loader import display_name, read_source
+from linmot_st.toolchain.builtin.parser import parse
+from linmot_st.toolchain.sources import INCLUDE_PRAGMA, resolve_include
 
 from .library import ExportError, Library, read_library
 
@@ -25,7 +31,6 @@ class StExport:
 
 
 def package_version() -> str:
-    from importlib.metadata import PackageNotFoundError, version
     try:
         return version("linmot-st")
     except PackageNotFoundError:
@@ -66,10 +71,6 @@ def header(lib: Library) -> str:
 
 def _expand(path: Path, root: Path, search: list[Path], stack: set[Path]) -> str:
     """The text of `path` with its top-level include pragmas replaced by the files they name."""
-    from linmot_st.toolchain.builtin.loader import display_name, read_source
-    from linmot_st.toolchain.builtin.parser import parse
-    from linmot_st.toolchain.sources import INCLUDE_PRAGMA, resolve_include
-
     text = read_source(path)
     items = parse(text, display_name(path, root, search))   # the compiler's reading: only top-level pragmas count
     line_starts = [0]
@@ -95,10 +96,6 @@ def _expand(path: Path, root: Path, search: list[Path], stack: set[Path]) -> str
 
 def _verify(text: str, lib: Library) -> None:
     """The expanded text must parse and check, and declare the library's types and POUs in order."""
-    from linmot_st.toolchain.builtin.checker import Checker
-    from linmot_st.toolchain.builtin.errors import BuiltinCompileError
-    from linmot_st.toolchain.builtin.parser import parse
-
     try:
         elements = parse(text, "export.st")
         Checker().check(elements, ["export.st"])

@@ -15,7 +15,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-from linmot_st.stcov import collect as stcov
+from . import coverage
 
 from .access import PathError, Resolver
 from .faults import PlcFault, locate_with_debug_info
@@ -83,7 +83,7 @@ class Plc:
         self.manifest = json.loads(self.manifest_path.read_text())
         self.backend = self.manifest.get("backend", "")
         self._lib = self._load_private_copy(self.library)
-        stcov.register(self._lib, self.library)      # a coverage build: its counters are written on request
+        coverage.register(self._lib, self.library)      # a coverage build: its counters are written on request
         for name, (args, res) in _ABI.items():
             try:
                 fn = getattr(self._lib, name)

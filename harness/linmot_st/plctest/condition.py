@@ -19,13 +19,17 @@ fails before any scan, with the column; it is then compiled to closures over the
 
 from __future__ import annotations
 
+import inspect
 import re
 from dataclasses import dataclass, field
 from functools import lru_cache, partial
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Any, Callable
 
 from lark import Lark, Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
+
+if TYPE_CHECKING:
+    from linmot_st.plc import Plc
 
 GRAMMAR = r"""
 ?start: disj
@@ -130,7 +134,7 @@ def _expected(names) -> str:
     return ", ".join(out) or "nothing"
 
 
-def condition(plc: Any, cond: str | Callable[[], Any], what: str | None = None) -> Condition:
+def condition(plc: Plc, cond: str | Callable[[], Any], what: str | None = None) -> Condition:
     """A condition from IEC text (module docstring) or a callable; the text is checked against the PLC's
     variables now, so an error shows before any scan."""
     if callable(cond):
@@ -161,7 +165,7 @@ _NUMERIC = ("INT", "REAL", "ANY")
 
 
 class _Compiler:
-    def __init__(self, plc: Any, text: str):
+    def __init__(self, plc: Plc, text: str):
         self.plc, self.text = plc, text
         self.paths: list[str] = []
 
@@ -354,7 +358,6 @@ def _names(t: _Typed) -> str:
 
 
 def _source_of(fn: Callable) -> str:
-    import inspect
     try:
         text = inspect.getsource(fn).strip()
     except (OSError, TypeError):

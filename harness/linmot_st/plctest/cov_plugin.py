@@ -64,7 +64,7 @@ def pytest_configure(config):
 
 
 def pytest_sessionfinish(session, exitstatus):
-    from linmot_st.stcov import collect
+    from linmot_st.plc import coverage as collect
     from linmot_st.toolchain import COVERAGE_ENV
     config = session.config
     if not enabled(config):

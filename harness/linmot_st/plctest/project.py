@@ -10,9 +10,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 import pytest
+
+from linmot_st.toolchain import BuildResult, build, choose_backend
 
 # ini name -> (help, default)
 INI = {
@@ -29,7 +30,7 @@ INI = {
 }
 
 
-def ini(config: Any, name: str) -> str:
+def ini(config: pytest.Config, name: str) -> str:
     value = config.getini(name)
     return (value if isinstance(value, str) else " ".join(value)).strip() or INI[name][1]
 
@@ -49,7 +50,7 @@ class Project:
     _builds: dict = field(default_factory=dict, repr=False)
 
     @classmethod
-    def from_config(cls, config: Any) -> "Project":
+    def from_config(cls, config: pytest.Config) -> "Project":
         root = ini(config, "linmot_st_root")
         base = Path(str(config.rootpath))
         backend = config.getoption("linmot_backend", None) or ini(config, "linmot_st_backend")
@@ -67,12 +68,10 @@ class Project:
         )
 
     def backend_of(self, backend: str | None = None) -> str:
-        from linmot_st.toolchain import choose_backend
         return choose_backend(backend or self.backend)
 
-    def build(self, entry: str | Path | None = None, backend: str | None = None) -> Any:
+    def build(self, entry: str | Path | None = None, backend: str | None = None) -> BuildResult:
         """The BuildResult of an entry file (default the project's), relative to the root or absolute."""
-        from linmot_st.toolchain import build
         chosen = self.backend_of(backend)
         path = Path(entry) if entry is not None else Path(self.entry)
         path = path if path.is_absolute() else self.root / path
@@ -91,7 +90,7 @@ class Project:
 _PROJECT = pytest.StashKey[Project]()
 
 
-def project_of(config: Any) -> Project:
+def project_of(config: pytest.Config) -> Project:
     """The session's Project, made once from its config (the plugin's fixtures and the ST tests share it)."""
     if _PROJECT not in config.stash:
         config.stash[_PROJECT] = Project.from_config(config)

@@ -14,9 +14,13 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Any, Callable
 
 from .condition import Condition, ConditionError, condition  # noqa: F401 - re-exported: the rig's API
+
+if TYPE_CHECKING:
+    from linmot_st.plc import Plc
+    from linmot_st.toolchain import BuildResult
 
 MAILBOX = "CONFIG0.RES0.CAN0"
 FRAMES_SHOWN = 12               # CAN frames in a failure message
@@ -160,11 +164,12 @@ class Rig:
     None on where the mailbox has TxEcho, False for a CAN driver without one).
     """
 
-    def __init__(self, build: Any, *, nodes: tuple[int, ...] | list[int] = (1,), bitrate: int = 500_000,
+    def __init__(self, build: BuildResult, *, nodes: tuple[int, ...] | list[int] = (1,), bitrate: int = 500_000,
                  timings: Any = "real", protocol: Any = None, profile: Any = None, latency_ns: int = 0,
                  drive_factory: Callable[[int], Any] | None = None, power_on: bool = True,
                  mailbox: str | None = MAILBOX, watch: list[str] | tuple = (), echo: bool | None = None,
                  model: Any = "E1100"):
+        # the simulation stack loads when a rig is made: the pytest11 plugin imports plctest in every session
         from linmot_st.bus import SimBus
         from linmot_st.cosim import CoSim
         from linmot_st.emulator.models import make_drive
@@ -398,7 +403,7 @@ def _fb_members(outputs: dict) -> list[str]:
     return [m for m in ("DONE", "BUSY", "ERROR", "ERRORID", "COMMANDABORTED", "PHASE") if m in outputs]
 
 
-def _value(plc: Any, path: str) -> str:
+def _value(plc: Plc, path: str) -> str:
     try:
         v = plc[path]
     except Exception as exc:  # noqa: BLE001 - a failure message must not fail itself
@@ -426,7 +431,7 @@ class RealTimeRig(Rig):
     emulated drives served from background threads (fast timings by default: nothing waits seconds).
     Budgets in scans are real scans (one per task interval of wall time). Close it (or use it in a `with`)."""
 
-    def __init__(self, build: Any, *, bus: str = "virtual", nodes: tuple[int, ...] | list[int] = (1,),
+    def __init__(self, build: BuildResult, *, bus: str = "virtual", nodes: tuple[int, ...] | list[int] = (1,),
                  bitrate: int = 500_000, timings: Any = "fast", protocol: Any = None, profile: Any = None,
                  drive_factory: Callable[[int], Any] | None = None, emulate: bool = True,
                  mailbox: str = MAILBOX, watch: list[str] | tuple = (), model: Any = "E1100"):
@@ -434,7 +439,7 @@ class RealTimeRig(Rig):
         import uuid
 
         from linmot_st.bus import open_bus
-        from linmot_st.commission.runner import _RecordingBus      # the PLC side's frame record
+        from linmot_st.jobs.commission.runner import _RecordingBus      # the PLC side's frame record
         from linmot_st.cosim import RealTimeCoSim
         from linmot_st.emulator.models import make_drive
         from linmot_st.plc import Plc

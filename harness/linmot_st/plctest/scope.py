@@ -16,7 +16,11 @@ import csv
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Any, Callable
+
+if TYPE_CHECKING:
+    from linmot_st.emulator import E1100Drive
+    from linmot_st.plc import Plc
 
 DRIVE_SIGNALS = ("position", "velocity", "state", "status_word", "nmt")
 DRIVE_DEFAULT = ("position", "velocity", "state")
@@ -165,7 +169,7 @@ def _vcd_value(s: Signal, v: Any) -> Any:
     return re.sub(r"\s+", "_", str(v))
 
 
-def _observe(drive: Any, t: int) -> None:
+def _observe(drive: E1100Drive, t: int) -> None:
     mc = getattr(drive, "mc", None)
     if mc is not None and mc.running:
         mc.observe(t)                                  # t <= the bus time: nothing changes what happens later
@@ -173,7 +177,7 @@ def _observe(drive: Any, t: int) -> None:
 
 # ---- signals -------------------------------------------------------------------------------------------------
 
-def plc_signal(plc: Any, path: str) -> Signal:
+def plc_signal(plc: Plc, path: str) -> Signal:
     """A PLC variable as a signal (an unknown path fails here, before any scan)."""
     var = plc.var(path)
     get = lambda: var.value  # noqa: E731 - the bound accessor: no lookup per scan

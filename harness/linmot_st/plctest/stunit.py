@@ -21,11 +21,12 @@ import hashlib
 import re
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import pytest
 
 from linmot_st import resources
+from linmot_st.toolchain import CompileError
+from linmot_st.toolchain.sources import collect
 
 from . import scope_plugin
 from .project import project_of
@@ -134,7 +135,6 @@ class StItem(pytest.Item):
         return project_of(self.config)
 
     def _entry(self) -> tuple[Path, bool]:
-        from linmot_st.toolchain.sources import collect
         project = self.project
         rel = _rel(self.path, project.root)
         src = collect(self.path, root=project.root)
@@ -201,7 +201,6 @@ class StItem(pytest.Item):
 
     def _assertion_location(self, msg: str) -> tuple[str, str]:
         """file:line of the failed assertion, found by its message among the project's own sources."""
-        from linmot_st.toolchain.sources import collect
         project = self.project
         src = collect(self.path, root=project.root)
         library = [t / name for t in [*src.search, src.root] for name in resources.TREES]
@@ -219,7 +218,6 @@ class StItem(pytest.Item):
         return f"{_rel(path or self.path, self.project.root)}:{line}"
 
     def repr_failure(self, excinfo, style=None):
-        from linmot_st.toolchain import CompileError
         if isinstance(excinfo.value, StTestFailed):
             return str(excinfo.value)
         if isinstance(excinfo.value, CompileError):      # the compiler's file:line:col diagnostics say it all
@@ -245,7 +243,7 @@ def _under(path: Path, folder: Path) -> bool:
         return False
 
 
-def _generated_dir(config: Any) -> Path:
+def _generated_dir(config: pytest.Config) -> Path:
     cache = getattr(config, "cache", None)
     if cache is not None:
         return Path(cache.mkdir("linmot-st-stunit"))

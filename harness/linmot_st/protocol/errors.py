@@ -27,6 +27,7 @@ it (`DRIVE_ERRORS`).
 
 from __future__ import annotations
 
+import csv
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -162,8 +163,6 @@ class DriveErrorDef:
 
 
 def _load_drive_errors() -> tuple[DriveErrorDef, ...]:
-    import csv
-
     path = Path(__file__).resolve().parents[1] / "emulator" / "data" / "e1100_error_texts.csv"
     with open(path, newline="", encoding="latin-1") as f:
         rows = csv.DictReader(line for line in f if not line.startswith("#"))

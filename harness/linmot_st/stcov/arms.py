@@ -18,6 +18,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from linmot_st.toolchain.builtin import ast as A
+from linmot_st.toolchain.builtin.errors import BuiltinCompileError
+from linmot_st.toolchain.builtin.parser import parse
 from linmot_st.toolchain.matiec.line_map import decisions
 
 
@@ -71,8 +73,6 @@ class StFile:
 def read(path: Path) -> StFile:
     """The POUs and decisions of one ST file. A file the parser cannot read (not the subset) has none:
     its lines are still reported, its branches are not."""
-    from linmot_st.toolchain.builtin.errors import BuiltinCompileError
-    from linmot_st.toolchain.builtin.parser import parse
     path = Path(path)
     try:
         elements = parse(path.read_text(errors="replace"), str(path))

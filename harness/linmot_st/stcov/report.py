@@ -9,7 +9,9 @@ own JSON tracefile format and writes the terminal table, Cobertura XML and the a
 from __future__ import annotations
 
 import hashlib
+import importlib.util
 import json
+import os
 import shutil
 import subprocess
 import sys
@@ -64,7 +66,6 @@ class Totals:
 
 def gcov_tool() -> str:
     """gcov of the C compiler that compiled (gcc's; $GCOV overrides)."""
-    import os
     return os.environ.get("GCOV", "gcov")
 
 
@@ -205,7 +206,6 @@ def write_reports(files: dict[Path, FileCoverage], out_dir: Path, root: Path, *,
 
 def gcovr_command() -> list[str]:
     """gcovr of this Python (a dependency), else the one on PATH."""
-    import importlib.util
     if importlib.util.find_spec("gcovr") is not None:
         return [sys.executable, "-m", "gcovr"]
     found = shutil.which("gcovr")

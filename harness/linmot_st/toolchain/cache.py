@@ -19,6 +19,8 @@ import shutil
 import tempfile
 from pathlib import Path
 
+from linmot_st.resources import user_cache_dir
+
 KEY_VERSION = "linmot-st-cache-1"
 LIBRARY_NAME = "libplc.so"
 MANIFEST_NAME = "manifest.json"
@@ -35,7 +37,6 @@ of the library, which is no place to write)."""
         return Path(env).expanduser()
     if in_tree:
         return root / "build" / "cache"
-    from linmot_st.resources import user_cache_dir
     return user_cache_dir()
 
 

@@ -137,7 +137,7 @@ def test_canopen_sends_a_pv_stream_on_vcan0(tmp_path):
     """The same stream to `linmot-st emulate` on vcan0 (a drive with a motor: its profile sets 1194h)."""
     import json
 
-    from linmot_st.vcan.testing import EmulatedDrives
+    from linmot_st_vcan.testing import EmulatedDrives
 
     from linmot_st.emulator.linmot.profile import DEFAULT_PROFILE
 

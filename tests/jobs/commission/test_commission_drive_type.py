@@ -7,8 +7,8 @@ from __future__ import annotations
 
 import pytest
 
-from linmot_st.commission.datasets import DriveTypeMismatch, Source, check_drive_type, drive_series
-from linmot_st.commission.testing import commission, example
+from linmot_st.jobs.commission.datasets import DriveTypeMismatch, Source, check_drive_type, drive_series
+from linmot_st.jobs.commission.testing import commission, example
 from linmot_st.emulator import E1100Drive
 from linmot_st.pvl import load_pvl
 from linmot_st.pvl.dataset import from_pvl

@@ -1,7 +1,7 @@
 """Commissioning end to end: the PLC (plc_project with the dataset of examples/two_axes.pvl) commissions
 emulated E1100 drives on the simulated bus; checked from the drives' memory, the bus trace and the report.
 
-One build per backend serves every test (linmot_st.commission.testing)."""
+One build per backend serves every test (linmot_st.jobs.commission.testing)."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ import pytest
 from linmot_st.bus.bits import bus_bits, unstuffed_bus_bits
 from linmot_st.cli import main
 from linmot_st.pvl.dataset import INFO_WORDS, PREFLIGHT_EXCHANGES
-from linmot_st.commission.testing import EXAMPLE, commission, example
+from linmot_st.jobs.commission.testing import EXAMPLE, commission, example
 
 
 from linmot_st.toolchain.testing import BACKEND_PARAMS
@@ -122,7 +122,7 @@ def test_other_node_ids_and_live_ram():
 def test_report_figures_agree_with_the_trace():
     """Every figure of the report recomputed from its definition: the bounds from the exchange counts, the
     bus's busy time from the frames' bit lengths, the plotted read-back from the 62h answers on the bus."""
-    from linmot_st.commission.plots import read_back_from_trace
+    from linmot_st.jobs.commission.plots import read_back_from_trace
 
     o = commission(axes=2)
     f, r = o.report.figures, o.result
@@ -229,7 +229,7 @@ def test_the_demo_command(tmp_path, capsys):
 
 def test_progress_on_a_terminal_and_in_a_log():
     import io
-    from linmot_st.commission.progress import Progress
+    from linmot_st.jobs.commission.progress import Progress
 
     tty, log = io.StringIO(), io.StringIO()
     commission(axes=2, verify=False, progress=Progress(tty, tty=True, interval_s=0))

@@ -12,7 +12,7 @@ import pytest
 
 from linmot_st.cli import main
 from linmot_st.pvl import dataset as dsf
-from linmot_st.commission.testing import EXAMPLE, commission, example
+from linmot_st.jobs.commission.testing import EXAMPLE, commission, example
 from linmot_st.emulator import DriveTimings, E1100Drive, load_profile
 
 
@@ -182,7 +182,7 @@ def test_real_drives_are_verified_by_the_plcs_read_back_and_fail_without_it():
     axis is done only after it read every item back), and without it nothing is verified."""
     from types import SimpleNamespace
 
-    from linmot_st.commission.verify import verify
+    from linmot_st.jobs.commission.verify import verify
 
     v = verify(PVL, {}, SimpleNamespace(verify=True))
     assert v.ok and "VERIFY phase" in v.by_plc and not v.skipped and not v.checks
@@ -194,7 +194,7 @@ def test_a_drive_that_changed_although_the_check_failed_is_compared_in_full():
     """The condensed "nothing written" is checked, not assumed: a change shows up, with the full comparison."""
     from types import SimpleNamespace
 
-    from linmot_st.commission.verify import drive_state, verify
+    from linmot_st.jobs.commission.verify import drive_state, verify
 
     drive = E1100Drive(1)
     before = {1: drive_state(drive)}
@@ -352,7 +352,7 @@ class Built(Exception):
 @pytest.fixture
 def no_build(monkeypatch):
     """The command's build step raises Built: a refusal must come before it."""
-    from linmot_st.commission import project
+    from linmot_st.jobs.commission import project
 
     def build(*a, **k):
         raise Built

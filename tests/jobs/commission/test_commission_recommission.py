@@ -7,7 +7,7 @@ from __future__ import annotations
 import json
 
 from linmot_st.cli import main
-from linmot_st.commission.testing import EXAMPLE, commission, example
+from linmot_st.jobs.commission.testing import EXAMPLE, commission, example
 from linmot_st.emulator import DriveTimings, E1100Drive
 from linmot_st.emulator.linmot.curves import Curve
 from linmot_st.protocol.errors import BY_NAME
@@ -169,9 +169,9 @@ class Station:
 
     def __init__(self, drive) -> None:
         from linmot_st.bus import SimBus
-        from linmot_st.commission.project import INSTANCE, MAILBOX
-        from linmot_st.commission.runner import RunOptions, _configure
-        from linmot_st.commission.testing import project_build
+        from linmot_st.jobs.commission.project import INSTANCE, MAILBOX
+        from linmot_st.jobs.commission.runner import RunOptions, _configure
+        from linmot_st.jobs.commission.testing import project_build
         from linmot_st.cosim import CoSim
         from linmot_st.plc import Plc
 
@@ -214,7 +214,7 @@ def test_a_save_that_failed_is_done_by_the_next_run_although_ram_matches():
 
 
 def test_under_a_powered_axis_only_a_run_that_needs_no_save_or_reset_goes_on():
-    from linmot_st.commission.verify import drive_state
+    from linmot_st.jobs.commission.verify import drive_state
 
     st = Station(E1100Drive(1, timings=DriveTimings.fast()))
     d = st.drive

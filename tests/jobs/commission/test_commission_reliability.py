@@ -10,8 +10,8 @@ import dataclasses
 import pytest
 
 from linmot_st.bus import Frame
-from linmot_st.commission import testing
-from linmot_st.commission.testing import example
+from linmot_st.jobs.commission import testing
+from linmot_st.jobs.commission.testing import example
 from linmot_st.emulator import DriveTimings, E1100Drive, load_profile
 
 MS = 1_000_000

@@ -13,12 +13,12 @@ import types
 import pytest
 
 from linmot_st.cli import main
-from linmot_st.commission.datasets import Datasets
-from linmot_st.commission.project import build_project, prepare
-from linmot_st.commission.report import Context, Report
-from linmot_st.commission.runner import RunOptions, run
-from linmot_st.commission.testing import EXAMPLE, example
-from linmot_st.commission.verify import verify_run
+from linmot_st.jobs.commission.datasets import Datasets
+from linmot_st.jobs.commission.project import build_project, prepare
+from linmot_st.jobs.commission.report import Context, Report
+from linmot_st.jobs.commission.runner import RunOptions, run
+from linmot_st.jobs.commission.testing import EXAMPLE, example
+from linmot_st.jobs.commission.verify import verify_run
 from linmot_st.pvl.to_st import to_st
 
 NODES = list(range(1, 33))
@@ -137,8 +137,8 @@ def test_32_axes_at_500_kbits_with_real_timings_are_heard_after_their_reset_than
     the first axes verify, the bus is busy all the time and a boot-up message (700h + node, the lowest
     priority) loses every arbitration. plc_project's drain (DrainEvery, CAN0.SdoHold) lets the bus go idle now
     and then while an axis listens; without it the last axes fail with BootTimeout."""
-    from linmot_st.commission.project import INSTANCE
-    from linmot_st.commission.testing import project_build
+    from linmot_st.jobs.commission.project import INSTANCE
+    from linmot_st.jobs.commission.testing import project_build
 
     build = project_build("builtin")
     opts = RunOptions(axes=32, node_ids=NODES, bitrate=500_000, timings="real")

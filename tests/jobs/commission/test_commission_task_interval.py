@@ -10,8 +10,8 @@ import pytest
 
 from linmot_st.cli import main
 from linmot_st import resources
-from linmot_st.commission.project import TASK_INTERVAL_NS, configuration_text, parse_task_interval, prepare
-from linmot_st.commission.testing import EXAMPLE, commission, example
+from linmot_st.jobs.commission.project import TASK_INTERVAL_NS, configuration_text, parse_task_interval, prepare
+from linmot_st.jobs.commission.testing import EXAMPLE, commission, example
 
 
 @pytest.mark.parametrize("text, ns", [("250us", 250_000), ("1ms", 1_000_000), ("0.5ms", 500_000),

@@ -1,4 +1,4 @@
-"""The fault-injection matrix (linmot_st.commission.faultmatrix, docs/commissioning.md "The fault-injection
+"""The fault-injection matrix (linmot_st.jobs.commission.faultmatrix, docs/commissioning.md "The fault-injection
 matrix"): every fault family at every phase of a commissioning run against an emulated drive. Each cell:
 the failure reported within its phase's bound or the fault tolerated, no false success (checked against
 the drive's memory and state), no stale confirmation, no hang or crash, the MC running again after a
@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import pytest
 
-from linmot_st.commission.faultmatrix import FAMILIES, PHASES, TOLERATED, run_cell
+from linmot_st.jobs.commission.faultmatrix import FAMILIES, PHASES, TOLERATED, run_cell
 
 
 @pytest.mark.parametrize("phase", PHASES)

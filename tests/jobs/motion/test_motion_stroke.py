@@ -12,12 +12,12 @@ from __future__ import annotations
 import pytest
 
 from linmot_st.cli import main
-from linmot_st.commission.project import build_project, prepare
-from linmot_st.commission.runner import RunOptions
+from linmot_st.jobs.commission.project import build_project, prepare
+from linmot_st.jobs.commission.runner import RunOptions
 from linmot_st.emulator.linmot.motion import MotionSettings
-from linmot_st.motion.check import check_motion
-from linmot_st.motion.job import run_job
-from linmot_st.motion.plan import plan
+from linmot_st.jobs.motion.check import check_motion
+from linmot_st.jobs.motion.job import run_job
+from linmot_st.jobs.motion.plan import plan
 from linmot_st.pvl import load_pvl, parse_pvl
 import repo_paths
 from repo_paths import EXAMPLES

@@ -7,8 +7,8 @@ from __future__ import annotations
 
 import pytest
 
-from linmot_st.commission.project import INSTANCE, MAILBOX
-from linmot_st.commission.testing import project_build
+from linmot_st.jobs.commission.project import INSTANCE, MAILBOX
+from linmot_st.jobs.commission.testing import project_build
 
 from plcopen_checks import (assert_exclusive, check_rising_edge_after_the_pulse, check_toggled_execute,
                             outputs, requests, run_recording)

@@ -1,4 +1,4 @@
-"""The process-data budget: linmot_st.motion.budget (the job's) and FB_LmPdoBudget (st_lib/motion/budget.st, the
+"""The process-data budget: linmot_st.jobs.motion.budget (the job's) and FB_LmPdoBudget (st_lib/motion/budget.st, the
 PLC program's) against the shared vectors tests/vectors/pdo_budget.json, and the motion job's refusal of a
 configuration that cannot fit, with its figures, before anything runs."""
 
@@ -12,7 +12,7 @@ import pytest
 from stbench import bench_build
 
 from linmot_st.protocol.errors import BY_NAME
-from linmot_st.motion.budget import EVENT, SYNC, BudgetInputs, load_at, plan_budget, vectors
+from linmot_st.jobs.motion.budget import EVENT, SYNC, BudgetInputs, load_at, plan_budget, vectors
 import repo_paths
 from repo_paths import EXAMPLES, ST_BENCHES
 
@@ -101,7 +101,7 @@ def test_the_job_refuses_a_configuration_that_cannot_fit(capsys):
     assert "refused" in err and "2,880 frames/s needed, 2,777 available at 70 % of the bus" in err
     assert "result:" not in out and "motion job" not in out          # nothing was commissioned or moved
     # a larger share lets the same bus take it (the figures, not a fixed axis count, decide)
-    from linmot_st.motion.budget import job_budget
+    from linmot_st.jobs.motion.budget import job_budget
     assert job_budget(24, 500_000, 75.0)[1].fits
 
 
@@ -109,12 +109,12 @@ def test_many_axes_move_within_the_budget():
     """20 axes at 1 Mbit/s (on main, 17 and more failed with CommandTimeout on a 98 % loaded bus): every step
     passes, the drives honour the inhibit time the budget chose, and the load after the PDO setup stays within
     the share in every 100 ms."""
-    from linmot_st.commission.project import build_project, prepare
-    from linmot_st.commission.runner import RunOptions
-    from linmot_st.motion.budget import job_budget
-    from linmot_st.motion.check import check_motion
-    from linmot_st.motion.job import run_job
-    from linmot_st.motion.plan import plan
+    from linmot_st.jobs.commission.project import build_project, prepare
+    from linmot_st.jobs.commission.runner import RunOptions
+    from linmot_st.jobs.motion.budget import job_budget
+    from linmot_st.jobs.motion.check import check_motion
+    from linmot_st.jobs.motion.job import run_job
+    from linmot_st.jobs.motion.plan import plan
     from linmot_st.pvl import load_pvl
 
     axes, bitrate = 20, 1_000_000

@@ -87,7 +87,7 @@ def test_a_list_in_a_comment_or_in_other_shapes_is_left_to_the_grammar():
 
 def test_a_big_dataset_round_trip(tmp_path):
     """20 curves of 4000 setpoints: plc_project's Ds holds the dataset stream word for word."""
-    from linmot_st.commission.project import INSTANCE, build_project, prepare
+    from linmot_st.jobs.commission.project import INSTANCE, build_project, prepare
     from linmot_st.plc import Plc
     from linmot_st.pvl import demo
     from linmot_st.pvl.dataset import encode

@@ -10,6 +10,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from ..models import make_drive
 from . import objects as cm
 from .objects import INTEGER32, UNSIGNED8
 
@@ -58,7 +59,6 @@ def _clean(text: str) -> str:
 def generate_eds(drive=None) -> str:
     """The EDS text for `drive` (default: the seeds' example drive)."""
     if drive is None:
-        from ..models import make_drive
         drive = make_drive("E1100", 1)
     ident = drive.profile.identity
     lines: list[str] = []

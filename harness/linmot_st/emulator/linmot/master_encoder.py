@@ -14,6 +14,7 @@ Units: counts are increments of the master encoder ([MC] 4.3.153 "1 Incr"), time
 from __future__ import annotations
 
 import bisect
+import csv
 import math
 from typing import Callable, Protocol, Sequence
 
@@ -240,7 +241,6 @@ def parse_signal(spec: str) -> Signal:
                 steps.append((round(float(t) * 1e9), float(v)))
             return SpeedProfile(steps)
         if kind == "recorded":
-            import csv
             with open(rest, newline="") as f:
                 rows = [r for r in csv.reader(f) if r and not r[0].lstrip().startswith("#")]
             return Recorded([(round(float(t) * 1e9), float(c)) for t, c in rows])

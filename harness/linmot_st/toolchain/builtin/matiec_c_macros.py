@@ -24,6 +24,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+from ..cc import find_compiler
+
 DATA = Path(__file__).with_name("matiec_c_macros.json")
 # what every unit iec2c writes includes (POUS.h, the POU and resource units)
 MATIEC_INCLUDES = ("iec_std_lib.h", "accessor.h")
@@ -55,7 +57,6 @@ def main(argv: list[str]) -> int:
     if len(argv) != 1:
         print("usage: python -m linmot_st.toolchain.builtin.matiec_c_macros MATIEC_HOME/lib/C", file=sys.stderr)
         return 2
-    from ..cc import find_compiler
     cc = find_compiler()
     about = ("Object-like C macros that MatIEC's generated C sees (it includes "
              f"{' and '.join(MATIEC_INCLUDES)}, and through them <limits.h>, <float.h>, <math.h>, <stdio.h>...), "

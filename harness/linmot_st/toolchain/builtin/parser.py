@@ -7,6 +7,7 @@ parse tree first. Literals are decoded here: integers, reals, durations (to ns),
 
 from __future__ import annotations
 
+import datetime
 import functools
 import re
 from pathlib import Path
@@ -597,7 +598,6 @@ def _duration_ns(text: str, pos: A.Pos) -> int:
 
 
 def _date_s(text: str, pos: A.Pos) -> int:
-    import datetime
     try:
         y, m, d = (int(x) for x in text.split("-"))
         return (datetime.date(y, m, d) - datetime.date(1970, 1, 1)).days * 86400

@@ -11,6 +11,7 @@ both backends. Only the blocks a program uses are compiled.
 from __future__ import annotations
 
 import functools
+import re
 
 _EDGE = """
 FUNCTION_BLOCK R_TRIG
@@ -182,7 +183,6 @@ def source() -> str:
 @functools.lru_cache(maxsize=1)
 def names() -> frozenset[str]:
     """The standard FBs' names (the checker asks for each identifier it declares)."""
-    import re
     return frozenset(re.findall(r"^FUNCTION_BLOCK (\w+)", source(), re.M))
 
 

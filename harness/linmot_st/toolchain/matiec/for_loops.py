@@ -16,6 +16,10 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
+from ..builtin import ast as A
+from ..builtin.errors import BuiltinCompileError
+from ..builtin.loader import display_name, read_source
+from ..builtin.parser import parse
 from .for_semantics import ForSemantics
 
 RANGES = {"SINT": (-2 ** 7, 2 ** 7 - 1), "INT": (-2 ** 15, 2 ** 15 - 1), "DINT": (-2 ** 31, 2 ** 31 - 1),
@@ -26,11 +30,6 @@ NOT_PROMOTED = {"DINT", "LINT", "UDINT", "ULINT"}     # C adds in the type itsel
 
 def warnings(paths: list[Path], root: Path, search: list[Path], sem: ForSemantics) -> list[str]:
     """`file:line:col: warning: ...` for each FOR that this iec2c's semantics changes."""
-    from ..builtin import ast as A
-    from ..builtin.errors import BuiltinCompileError
-    from ..builtin.loader import display_name, read_source
-    from ..builtin.parser import parse
-
     if sem.iec:
         return []
     out = []

@@ -19,6 +19,8 @@ import json
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
+from linmot_st.plc import Plc
+
 from .. import build, cache as _cache
 from .tool import find, version
 
@@ -113,7 +115,6 @@ def probe(cache_dir: Path | None = None) -> ForSemantics:
 
 
 def _measure(folder: Path, cache_dir: Path | None) -> ForSemantics:
-    from linmot_st.plc import Plc
     source = folder / "for_probe.st"
     if not source.is_file() or source.read_text() != PROBE_ST:
         source.write_text(PROBE_ST)

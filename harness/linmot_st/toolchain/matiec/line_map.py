@@ -21,6 +21,9 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+from ..builtin import ast as A
+from ..builtin.errors import BuiltinCompileError
+
 _DIRECTIVE = re.compile(r'^\s*#line\s+(\d+)\s+"((?:[^"\\]|\\.)*)"\s*$')
 _ELSE_IF = re.compile(r"^\s*\}\s*else\s+if\s*\(")
 # a line of no statement: a block's end (`}`, `};`, a function's `} // F_body__()`) or CASE's next test
@@ -91,7 +94,6 @@ def _body_tails(lines: list[str]) -> set[int]:
 
 def decisions(stmts: list) -> list:
     """Every IF and CASE statement in these statements, nested ones included, in source order."""
-    from ..builtin import ast as A
     out = []
     for s in stmts:
         if isinstance(s, A.If):
@@ -111,9 +113,7 @@ def decisions(stmts: list) -> list:
 
 def elsif_lines(path: Path) -> list[int]:
     """The lines of the tests of every ELSIF in an ST file, sorted (read with the builtin parser)."""
-    from ..builtin import ast as A
-    from ..builtin.errors import BuiltinCompileError
-    from ..builtin.parser import parse
+    from ..builtin.parser import parse   # lark loads on first use: `linmot-st --help` imports this module
     try:
         elements = parse(Path(path).read_text(errors="replace"), str(path))
     except (BuiltinCompileError, OSError, RecursionError):

@@ -13,6 +13,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ..builtin import ast as A
+
 
 @dataclass
 class TypeSpec:
@@ -49,8 +51,6 @@ class Declarations:
 
 def _spec(node) -> TypeSpec:
     """The manifest-relevant shape of a type specification node of the builtin AST."""
-    from ..builtin import ast as A
-
     if isinstance(node, A.NamedSpec):
         name = node.name.upper()
         return TypeSpec("string", name=name) if name in ("STRING", "WSTRING") else TypeSpec("name", name=name)
@@ -79,8 +79,7 @@ def _vars(blocks, target: dict[str, TypeSpec]) -> None:
 
 def scan(files: list[tuple[str, str]]) -> Declarations:
     """Declarations of the given (name, text) sources, in order (included files are given separately)."""
-    from ..builtin import ast as A
-    from ..builtin.parser import parse
+    from ..builtin.parser import parse   # lark loads on first use: `linmot-st --help` imports this module
 
     decls = Declarations()
     for name, text in files:
@@ -101,5 +100,5 @@ def scan(files: list[tuple[str, str]]) -> Declarations:
 
 
 def scan_paths(paths: list[Path], root: Path, search: list[Path] = ()) -> Declarations:
-    from ..builtin.loader import display_name, read_source
+    from ..builtin.loader import display_name, read_source   # (the parser: lark, on first use)
     return scan([(display_name(p, root, search), read_source(p)) for p in paths])

@@ -9,9 +9,12 @@ import hashlib
 import os
 import re
 import shutil
+import signal as _signal
 import subprocess
 from dataclasses import dataclass
 from pathlib import Path
+
+from linmot_st.resources import TREES
 
 from ..sources import Sources
 
@@ -119,7 +122,6 @@ def diagnostics_from(stderr: str, entry: str, rc: int) -> list[str]:
 
 def signal_message(sig: int) -> str:
     """What it means when iec2c ends on a signal."""
-    import signal as _signal
     try:
         name = _signal.Signals(sig).name
     except ValueError:
@@ -157,7 +159,6 @@ def include_folder(m: Matiec, search: list[Path], folder: Path) -> Path:
     library (ieclib.txt and the files it includes). For a build with the library tree on its search path
     (sources.library_search), `folder` gets links to MatIEC's library files and to the tree's st_lib/ and
     plc_project/, and serves as that -I folder."""
-    from linmot_st.resources import TREES
     folder.mkdir(parents=True, exist_ok=True)
     links = {p.name: p for p in m.lib.iterdir()}
     for tree in search:

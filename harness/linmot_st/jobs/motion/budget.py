@@ -1,0 +1,175 @@
+"""The process-data budget of a CAN bus: how many bits per second N moving E1100 axes need from their PDOs, and
+the TxPDO2 inhibit time (event mode) or SYNC period (SYNC mode) that keeps that below a share of the bit rate.
+
+The Python twin of st_lib/motion/budget.st (FB_LmPdoBudget, which a PLC program calls before motion): the same
+integer arithmetic, cross-checked by the shared vectors tests/vectors/pdo_budget.json (written from this module
+by `python -m linmot_st.jobs.motion.budget --write`; tests/st_lib/motion/test_motion_budget.py runs both against them).
+
+What is counted, per axis and second (docs/bus.md, "The process-data budget"), every frame at its worst-case
+length with stuff bits (linmot_st.bus.bits.max_bus_bits: 135 bits for 8 bytes, the bound CAN load tools use):
+  - TxPDO2 (280h + node, 8 bytes): on change, and a moving drive changes it every MC cycle
+    (docs/emulator.md 13), so once per max(inhibit time, MC cycle); in SYNC mode once per SYNC;
+  - TxPDO1 (180h + node, 8 bytes): once per event timer, plus two changes of its state var per motion
+    command (accepted, done); in SYNC mode once per SYNC;
+  - RxPDO2 (300h + node, 8 bytes) and RxPDO3 (400h + node, Rx3Bytes): one each per motion command;
+  - RxPDO1 (200h + node, 2 bytes): the control word, once per RefreshTime;
+  - SYNC (080h, no data), once per period, in SYNC mode.
+Rates are kept in millihertz (integers), so that ST (UDINT) and Python compute the same figures.
+"""
+
+from __future__ import annotations
+
+import json
+from bisect import bisect_left
+from dataclasses import asdict, dataclass, replace
+from pathlib import Path
+
+from linmot_st.bus.bits import max_bus_bits
+from linmot_st.bus.stats import bus_stats
+
+EVENT, SYNC = "event", "sync"
+VECTORS = Path(__file__).resolve().parents[4] / "tests" / "vectors" / "pdo_budget.json"
+
+
+@dataclass(frozen=True)
+class BudgetInputs:
+    axes: int
+    bitrate: int                        # bit/s, a multiple of 1000 (every CiA 301 bit rate is)
+    share_permille: int = 700           # the planned load may use this share of the bus
+    mode: str = EVENT                   # EVENT: TxPDOs on change (type 254); SYNC: every SYNC (type 1)
+    tx1_event_ms: int = 50              # TxPDO1 event timer (1800h sub 5), 0 = off
+    commands_per_s: int = 10            # motion commands per axis and second the program issues at most
+    refresh_ms: int = 100               # FB_LmPdo's RefreshTime: the control word at least this often
+    rx3_bytes: int = 4                  # RxPDO3's length (2041h)
+    mc_cycle_us: int = 1000             # the drive's MC cycle: TxPDO2 changes at most once per cycle
+    max_interval_100us: int = 200       # the longest inhibit time / SYNC period allowed (20 ms)
+
+
+@dataclass(frozen=True)
+class Budget:
+    fits: bool
+    interval_100us: int                 # TxPDO2 inhibit time (EVENT) or SYNC period (SYNC), 100 us
+    bits_per_s: int                     # planned bus bits per second (worst-case stuffing)
+    load_permille: int                  # bits_per_s / bitrate, rounded up
+    frames_needed: int                  # frames per second, rounded up
+    frames_available: int               # frames per second of the plan's mean length that fit in the share
+
+    def describe(self, inp: BudgetInputs) -> str:
+        what = "TxPDO2 inhibit time" if inp.mode == EVENT else "SYNC period"
+        return (f"{inp.axes} axes at {inp.bitrate // 1000} kbit/s: {self.frames_needed:,} frames/s needed, "
+                f"{self.frames_available:,} available at {inp.share_permille / 10:g} % of the bus "
+                f"({what} {self.interval_100us / 10:g} ms; planned load {self.load_permille / 10:g} %, "
+                f"{self.bits_per_s:,} bit/s)")
+
+
+def frame_bits(dlc: int) -> int:
+    return max_bus_bits(dlc)
+
+
+def load_at(inp: BudgetInputs, interval_100us: int) -> tuple[int, int]:
+    """(bits per second, frames per second x 1000) of the whole bus with this inhibit time / SYNC period."""
+    b8 = frame_bits(8)
+    period_us = max(interval_100us * 100, inp.mc_cycle_us)
+    cmd_mhz = 1000 * inp.commands_per_s
+    cw_mhz = 1_000_000 // inp.refresh_ms if inp.refresh_ms > 0 else 0
+    if inp.mode == SYNC:
+        tx1_mhz = tx2_mhz = sync_mhz = 1_000_000_000 // period_us
+    else:
+        tx2_mhz = 1_000_000_000 // period_us
+        tx1_mhz = (1_000_000 // inp.tx1_event_ms if inp.tx1_event_ms > 0 else 0) + 2 * cmd_mhz
+        sync_mhz = 0
+    axis_mbits = ((tx1_mhz + tx2_mhz + cmd_mhz) * b8 + cmd_mhz * frame_bits(inp.rx3_bytes)
+                  + cw_mhz * frame_bits(2))
+    axis_bits = (axis_mbits + 999) // 1000
+    bits = inp.axes * axis_bits + (sync_mhz * frame_bits(0) + 999) // 1000
+    frames_mhz = inp.axes * (tx1_mhz + tx2_mhz + 2 * cmd_mhz + cw_mhz) + sync_mhz
+    return bits, frames_mhz
+
+
+def plan_budget(inp: BudgetInputs) -> Budget:
+    """The shortest inhibit time (EVENT, from 0) or SYNC period (SYNC, from the MC cycle), in 100 us steps up to
+    max_interval_100us, whose planned load stays within the share; fits is False when even the longest does not."""
+    if inp.axes < 1 or inp.bitrate < 1000 or inp.bitrate % 1000:
+        raise ValueError(f"budget: axes >= 1 and a bit rate that is a multiple of 1000 (got {inp.axes}, "
+                         f"{inp.bitrate})")
+    kbit = inp.bitrate // 1000
+    allowed = inp.share_permille * kbit
+    interval = 0 if inp.mode == EVENT else (inp.mc_cycle_us + 99) // 100
+    while True:
+        bits, frames_mhz = load_at(inp, interval)
+        fits = bits <= allowed
+        if fits or interval >= inp.max_interval_100us:
+            break
+        interval += 1
+    frames = (frames_mhz + 999) // 1000
+    mean_bits = bits // frames if frames else frame_bits(8)       # floor: a plan that fits never shows fewer
+    return Budget(fits, interval, bits, (bits + kbit - 1) // kbit, frames, allowed // mean_bits)
+
+
+def job_inputs(axes: int, bitrate: int, share_percent: float = 70.0) -> BudgetInputs:
+    """The motion job's (plc_project/motion.st): event mode, TxPDO1 event timer 50 ms, FB_LmPdo's defaults."""
+    return BudgetInputs(axes=axes, bitrate=bitrate, share_permille=round(share_percent * 10))
+
+
+class BudgetRefused(ValueError):
+    """The planned process data do not fit the bus's share: the figures say by how much."""
+
+
+def job_budget(axes: int, bitrate: int, share_percent: float = 70.0) -> tuple[BudgetInputs, Budget]:
+    """The job's budget; BudgetRefused (with the figures) when even the longest inhibit time does not fit."""
+    inp = job_inputs(axes, bitrate, share_percent)
+    b = plan_budget(inp)
+    if not b.fits:
+        raise BudgetRefused(f"the process data do not fit the bus: {b.describe(inp)}; fewer axes, a higher bit "
+                            f"rate or a larger --bus-share")
+    return inp, b
+
+
+def measured_load(trace, bit_ns: int, t0_ns: int, t1_ns: int, window_ns: int = 100_000_000) -> tuple[float, float]:
+    """What the bus carried in [t0, t1) (the motion job's phase): the mean load and the highest load of any
+    window of window_ns (a planned load is a rate; a short burst is what overloads a bus)."""
+    if t1_ns <= t0_ns:
+        return 0.0, 0.0
+    starts = [e.start_ns for e in trace]
+    lo = bisect_left(starts, t0_ns - window_ns)
+    part = trace[lo:bisect_left(starts, t1_ns)]
+    mean = bus_stats(part, bit_ns, t0_ns, t1_ns).load
+    peak, t = 0.0, t0_ns
+    while t < t1_ns:
+        end = min(t + window_ns, t1_ns)
+        if end - t >= window_ns // 2:             # a last stub of a window says little
+            peak = max(peak, bus_stats(part, bit_ns, t, end).load)
+        t = end
+    return mean, peak
+
+
+# ------------------------------------------------------------------ the shared vectors
+def _vector_inputs() -> list[BudgetInputs]:
+    base = BudgetInputs(axes=2, bitrate=500_000)
+    out = [base]
+    for axes in (1, 4, 12, 16, 17, 24, 32):
+        for bitrate in (250_000, 500_000, 1_000_000):
+            out.append(replace(base, axes=axes, bitrate=bitrate))
+    out += [replace(base, axes=32, bitrate=1_000_000, mode=SYNC), replace(base, axes=8, bitrate=500_000, mode=SYNC),
+            replace(base, axes=16, bitrate=1_000_000, share_permille=500),
+            replace(base, axes=16, bitrate=1_000_000, tx1_event_ms=0, commands_per_s=0, rx3_bytes=8),
+            replace(base, axes=3, bitrate=125_000, refresh_ms=0, max_interval_100us=50),
+            replace(base, axes=64, bitrate=1_000_000)]
+    return out
+
+
+def vectors() -> dict:
+    rows = [dict(inputs=asdict(i), budget=asdict(plan_budget(i))) for i in _vector_inputs()]
+    return {"about": "process-data budget (linmot_st.jobs.motion.budget, st_lib/motion/budget.st); written by "
+                     "python -m linmot_st.jobs.motion.budget --write",
+            "frame_bits": {str(d): frame_bits(d) for d in range(9)}, "vectors": rows}
+
+
+if __name__ == "__main__":
+    import sys
+
+    text = json.dumps(vectors(), indent=1) + "\n"
+    if "--write" in sys.argv:
+        VECTORS.write_text(text)
+    else:
+        sys.stdout.write(text)
