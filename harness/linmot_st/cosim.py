@@ -184,7 +184,13 @@ class IdlePredicate:
     """Base of a run_until predicate that lets idle scans run in C between its calls: it watches the
     variables it reads (`idle_watch`) and counts scans by the PLC's scan counter. `scans` is what a
     counter of its calls would hold (the predicate is called before each scan and after the last): the
-    scans run so far inside a call, one more after it."""
+    scans run so far inside a call, one more after it.
+
+    `changes_nodes` False after a call: that call changed no node of the bus (no drive's input, clock or
+    state), so the bus need not ask every node for its next timer again before the next scan (an O(nodes)
+    round per scan; run_until's first scan asks all the same). True, the default, is always safe."""
+
+    changes_nodes = True
 
     def __init__(self, plc: Plc, watched: list) -> None:
         self.plc = plc
@@ -236,26 +242,26 @@ class CoSim:
         while done < n:
             done += self._advance(n - done, None)
 
-    def _advance(self, limit: int, watch: Any) -> int:
+    def _advance(self, limit: int, watch: Any, current: bool = False) -> int:
         """Idle scans in C (at most `limit`) when the next scan is idle, else one scan from Python; returns
-        the scans run."""
-        refreshed = False
+        the scans run. `current`: no node changed from outside since the bus last ran (its timers hold)."""
+        refreshed = current
         if self.fast_idle:
-            k = self._idle(limit, watch)
+            k = self._idle(limit, watch, current)
             if k > 0:
                 return k
-            refreshed = k < 0           # the bus has just read every node's timer: no need again
+            refreshed = current or k < 0    # the bus has just read every node's timer: no need again
         self._scan(refreshed)
         return 1
 
-    def _idle(self, limit: int, watch: Any) -> int:
+    def _idle(self, limit: int, watch: Any, current: bool = False) -> int:
         """Up to `limit` idle scans in C when the next scan would receive nothing; returns the scans run (0:
         the next scan is not idle; -1: not idle, and the bus's timers were read just now)."""
         plc, bus = self.plc, self.bus
         t = plc.time_ns
         if t < bus.now or self.endpoint.inbox or (self.echo and len(bus.trace) != self._trace_pos):
             return 0
-        until = bus.next_event_ns(refresh=True)
+        until = bus.next_event_ns(refresh=not current)
         if until is not None and until <= t:
             return -1
         mb = self.mailbox
@@ -265,7 +271,7 @@ class CoSim:
         self.scans += k
         self.idle_scans += k
         t_last = plc.time_ns - plc.tick_ns     # the start of the last scan: its frames are ready then
-        bus.run_until(t_last)                  # no event on the way: the bus's state as after a scan there
+        bus.run_until(t_last, refresh=False)   # no event on the way (only C scans since the timers were read)
         if mb._tx_count.value:
             self._send(mb.take_tx(), t_last)
         return k
@@ -321,10 +327,14 @@ class CoSim:
         one. Without it the predicate is called before every scan."""
         watch = getattr(predicate, "idle_watch", None)
         k = 0
+        declares = hasattr(predicate, "changes_nodes")
+        current = False         # the first scan reads every node's timer (the caller may have changed a node)
         while k < max_scans:
             if predicate():
                 return k
-            k += self._advance(max_scans - k, watch) if watch is not None else self._advance(1, None)
+            current = current and declares and not predicate.changes_nodes
+            k += self._advance(max_scans - k, watch, current) if watch is not None else self._advance(1, None, current)
+            current = True
         if predicate():
             return max_scans
         raise CoSimTimeout(f"condition not met within {max_scans} scans (PLC time {self.plc.time_ns} ns)")

@@ -62,7 +62,7 @@ def measure(axes: int, fast_idle: bool = True, report: Path | None = None, c_sha
     from linmot_st.jobs.motion.budget import job_budget
     from linmot_st.jobs.motion.check import check_motion
     from linmot_st.jobs.motion.cli import command_line
-    from linmot_st.jobs.motion.job import motion_phase, run
+    from linmot_st.jobs.motion.job import job_drives, motion_phase, run
     from linmot_st.jobs.motion.plan import plan as make_plan
     from linmot_st.jobs.motion.report import MotionReport
 
@@ -83,7 +83,9 @@ def measure(axes: int, fast_idle: bool = True, report: Path | None = None, c_sha
 
     acc = dict(c_s=0.0)
     with _timed_scans(acc) if c_share else contextlib.nullcontext():
-        res = run(prep.pvl, opts, prep.build, dataset=prep.dataset, after=after)
+        # the job's drives: the mechanics the plan's stroke places (as run_job does), so every step can pass
+        res = run(prep.pvl, opts, prep.build, dataset=prep.dataset, after=after,
+                  drive_factory=job_drives(steps, opts, prep.datasets))
     if res.after is None or res.after.timed_out:
         raise RuntimeError(f"the demo run on {axes} axes did not finish: commissioned "
                            f"{sum(a.done for a in res.axes)} of {axes}")

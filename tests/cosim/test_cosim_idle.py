@@ -222,3 +222,106 @@ def test_the_motion_job_is_the_same_with_idle_scans_in_c(idle_build):
         [[dataclasses.astuple(s) for s in a.steps] for a in fast.after.axes]
     assert (slow.scans, slow.after.scans, slow.after.t1_ns) == (fast.scans, fast.after.scans, fast.after.t1_ns)
     assert idle > 0.6 * fast.scans       # the boot, flash and reset waits ran in C
+
+
+class _AlwaysChangesNodes:
+    """A sampler's `changes_nodes` that says True whatever the sampler sets: the bus reads every timer each scan."""
+
+    def __get__(self, obj, owner=None):
+        return True
+
+    def __set__(self, obj, value):
+        pass
+
+
+def test_samplers_that_change_no_node_spare_the_timer_reads_and_nothing_else(idle_build, monkeypatch):
+    """The samplers declare changes_nodes False (the motion sampler except when it moves a drive's input or
+    conveyor), so the bus does not ask every drive for its next timer before each scan. The demo's scenario on 4
+    axes (TxPDO2 with the budget's inhibit time): the same trace, phases, steps and trajectories as with every
+    timer read before every scan."""
+    from linmot_st.jobs.commission.runner import RunOptions, Sampler
+    from linmot_st.jobs.commission.testing import project_build
+    from linmot_st.jobs.motion.budget import job_budget
+    from linmot_st.jobs.motion.job import MotionSampler, job_drives, motion_phase, run
+    from linmot_st.jobs.motion.plan import plan as make_plan
+    from linmot_st.pvl import load_pvl
+
+    pvl = load_pvl(REPO / "examples" / "two_axes.pvl")
+    steps = make_plan(pvl, 50.0)
+    inhibit = job_budget(4, 500_000)[1].interval_100us
+    assert inhibit > 0
+    out = []
+    for forced in (False, True):
+        if forced:
+            monkeypatch.setattr(Sampler, "changes_nodes", _AlwaysChangesNodes())
+            monkeypatch.setattr(MotionSampler, "changes_nodes", _AlwaysChangesNodes(), raising=False)
+        opts = RunOptions(axes=4, timings="fast")
+        res = run(pvl, opts, project_build(idle_build.backend), after=motion_phase(steps, 60.0, None, inhibit),
+                  drive_factory=job_drives(steps, opts))
+        assert res.after is not None and res.after.finished
+        out.append(res)
+    spared, every = out
+    assert spared.trace == every.trace and len(spared.trace) > 5000
+    assert [[dataclasses.astuple(p) for p in a.phases] for a in spared.axes] == \
+        [[dataclasses.astuple(p) for p in a.phases] for a in every.axes]
+    assert [[dataclasses.astuple(s) for s in a.steps] for a in spared.after.axes] == \
+        [[dataclasses.astuple(s) for s in a.steps] for a in every.after.axes]
+    for n, drive in spared.drives.items():
+        assert drive.mc.trajectory.samples == every.drives[n].mc.trajectory.samples
+
+
+class _Alarm:
+    """A bus node set from outside: it sends one frame when its alarm (set by the test) goes off."""
+
+    def __init__(self) -> None:
+        self.at: int | None = None
+
+    def on_frame(self, frame: Frame, t_ns: int) -> list:
+        return []
+
+    def on_timer(self, t_ns: int) -> list:
+        self.at = None
+        return [(t_ns, Frame(0x555, b"\x01"))]
+
+    def next_timer_ns(self) -> int | None:
+        return self.at
+
+
+class _SetsAlarm(IdlePredicate):
+    """At its first call from scan 20 on it sets the alarm 3 ms ahead (a change to a node from outside), declaring
+    it or not."""
+
+    def __init__(self, plc, alarm: _Alarm, declares: bool) -> None:
+        super().__init__(plc, [plc.var("INST0.SCANS")])      # called after every scan, also with idle scans in C
+        self.alarm, self.declares, self.set_for = alarm, declares, None
+
+    def __call__(self) -> bool:
+        scan = self.begin_call()
+        self.changes_nodes = False
+        if scan >= 20 and self.set_for is None:
+            self.alarm.at = self.set_for = self.plc.time_ns + 3_000_000
+            self.changes_nodes = self.declares
+        self.end_call()
+        return self.set_for is not None and self.plc.time_ns > self.set_for + 5_000_000
+
+
+@pytest.mark.parametrize("fast", [False, True])
+def test_a_predicate_that_changes_a_node_says_so_and_the_bus_sees_it(idle_build, fast):
+    """changes_nodes True after the call that changed a node: the bus reads the timers again, the node's frame goes
+    at its time. Not declared, the bus keeps the timer it read last until the node's next event (a frame it
+    receives; here none): the frame never goes (the contract: say so, or it is seen late or never)."""
+    from linmot_st.plc import Plc
+    sent = {}
+    for declares in (True, False):
+        plc = Plc(idle_build)
+        plc["INST0.GATE"] = False           # no heartbeat: nothing else on the bus makes it read the timer
+        bus = SimBus(500_000)
+        alarm = _Alarm()
+        bus.attach(alarm, "alarm")
+        sim = CoSim(plc, bus, mailbox=MB, fast_idle=fast)
+        predicate = _SetsAlarm(plc, alarm, declares)
+        sim.run_until(predicate, max_scans=1000)
+        sent[declares] = (predicate.set_for, [e.start_ns for e in bus.trace if e.frame.can_id == 0x555])
+    due, frames = sent[True]
+    assert frames == [due]
+    assert sent[False][1] == []

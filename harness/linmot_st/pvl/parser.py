@@ -245,7 +245,23 @@ class _Reader:
         else:
             self.i += 1
         rows = []
-        while (nxt := self.next_nonblank()) is not None:
+        lines, n = self.lines, len(self.lines)
+        while True:
+            # the rows, a line each (a curve's setpoints: up to 16,384 of them), read in this loop's own locals
+            i = self.i
+            while i < n:
+                text = lines[i]
+                if not text:
+                    i += 1
+                elif text[0] != "@":
+                    i += 1
+                    rows.append((i, parse_row(i, text)))        # i: the line number of lines[i - 1]
+                else:
+                    break
+            self.i = i
+            nxt = self.next_nonblank()
+            if nxt is None:
+                break
             lineno, text = nxt
             key, value = _split_key(text)
             if key == close_key and value is None:
@@ -263,11 +279,8 @@ class _Reader:
                 if key.startswith("End"):
                     self.i += 1
                 return rows
-            self.i += 1
-            if text.startswith("@"):
-                self.error(lineno, f"unexpected {_show(text)} inside the block opened at line {open_line}")
-                continue
-            rows.append((lineno, parse_row(lineno, text)))
+            self.i += 1                 # an @ line of no block (the rows were read above)
+            self.error(lineno, f"unexpected {_show(text)} inside the block opened at line {open_line}")
         self.error(self.eof_line(), f"missing @{close_key} (the block opened at line {open_line}), "
                                     f"and @EndObject of the object started at line {start}")
         return None

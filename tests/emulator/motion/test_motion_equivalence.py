@@ -23,12 +23,14 @@ def _cmd(cid: int, count: int, **fields) -> list[Frame]:
     return [Frame(0x301, raw[:8]), Frame(0x401, raw[:2] + raw[8:10])]
 
 
-def _script(sync: bool) -> list[tuple[int, Frame]]:
+def _script(sync: bool, inhibit_100us: int = 0) -> list[tuple[int, Frame]]:
     cw = lambda w: Frame(0x201, struct.pack("<H", w))                               # noqa: E731
     sdo_read = lambda upid: Frame(0x601, struct.pack("<BHB4x", 0x40, 0x2000 + upid, 1))   # noqa: E731
     s: list[tuple[int, Frame]] = []
     if sync:
         s.append((50 * MS, Frame(0x601, struct.pack("<BHBBxxx", 0x2F, 0x1801, 2, 1))))   # TxPDO2 on SYNC
+    if inhibit_100us:                                                                   # TxPDO2's inhibit time
+        s.append((50 * MS, Frame(0x601, struct.pack("<BHBHxx", 0x2B, 0x1801, 3, inhibit_100us))))
     s += [(60 * MS, Frame(0x000, b"\x01\x01")), (61 * MS, cw(0x003E)), (70 * MS, cw(0x003F)),
           (120 * MS, cw(0x083F)), (150 * MS, cw(0x003F))]
     t = 200 * MS
@@ -45,7 +47,7 @@ def _script(sync: bool) -> list[tuple[int, Frame]]:
     return sorted(s, key=lambda x: x[0])
 
 
-def _run(quiet: bool, sync: bool, hold_ns: int):
+def _run(quiet: bool, sync: bool, hold_ns: int, inhibit_100us: int = 0):
     profile = load_profile().with_defaults({0x1194: 2, 0x146F: 250 * MM, 0x146E: -10 * MM})
     drive = E1100Drive(1, profile, timings=DriveTimings.fast(),
                        motion=MotionSettings(quiet_cycles=quiet, in_target_hold_ns=hold_ns))
@@ -56,14 +58,21 @@ def _run(quiet: bool, sync: bool, hold_ns: int):
         generic.append(t)
         original(t)
     drive.mc._cycle = counted
+    wakes = []                                 # the bus's timer calls of the drive
+    on_timer = drive.on_timer
+
+    def woken(t: int) -> list:
+        wakes.append(t)
+        return on_timer(t)
+    drive.on_timer = woken
     bus = SimBus(1_000_000)
     bus.attach(drive, "drive")
-    bus.attach(ScriptedNode(_script(sync)), "master")
+    bus.attach(ScriptedNode(_script(sync, inhibit_100us)), "master")
     drive.power_on(0)
     for k in range(1, 40):                     # observed now and then, as a test would (no effect on either)
         bus.run_until(k * 100 * MS)
     trace = [(e.start_ns, e.frame.can_id, bytes(e.frame.data)) for e in bus.trace]
-    drive.generic_cycles = len(generic)
+    drive.generic_cycles, drive.wakes = len(generic), len(wakes)
     return trace, list(drive.mc.trajectory.samples), drive
 
 
@@ -83,3 +92,19 @@ def test_quiet_cycles_are_used():
     _, _, drive = _run(True, True, 0)
     assert ref.generic_cycles > 900                                        # every cycle, one by one
     assert drive.generic_cycles < ref.generic_cycles / 10
+
+
+@pytest.mark.parametrize("inhibit_100us, wakes_share", [(35, 0.7), (100, 0.35)])
+def test_quiet_cycles_ahead_while_the_event_pdo_waits_for_its_inhibit_time(inhibit_100us, wakes_share):
+    """TxPDO2 event-driven with an inhibit time (the bus budget's): while it waits for the inhibit time to end, the
+    quiet cycles up to then are computed ahead (a change in them sends nothing; at the end it goes with the content
+    of that time). The same frames and trajectory as every cycle run one by one, and far fewer wakes."""
+    ref_trace, ref_samples, ref = _run(False, False, 0, inhibit_100us)
+    trace, samples, drive = _run(True, False, 0, inhibit_100us)
+    assert len(trace) == len(ref_trace) and trace == ref_trace
+    assert len(samples) == len(ref_samples) and samples == ref_samples
+    assert drive.errlog.entries == ref.errlog.entries
+    assert sum(e[1] == 0x281 for e in trace) > 50                          # TxPDO2 ran, spaced by the inhibit
+    # about two wakes per inhibit time while moving (its end, the next cycle) instead of one per 1 ms cycle
+    _, _, every_cycle = _run(True, False, 0)                                # no inhibit: a wake every cycle
+    assert drive.wakes < wakes_share * every_cycle.wakes, (drive.wakes, every_cycle.wakes)

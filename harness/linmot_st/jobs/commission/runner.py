@@ -220,6 +220,8 @@ class RunResult:
 class Sampler(IdlePredicate):
     """Reads each axis' outputs after every scan; records phase boundaries; tells the progress display."""
 
+    changes_nodes = False       # it reads the PLC only
+
     def __init__(self, plc, node_ids: list[int], progress=None) -> None:
         self.progress = progress
         self.axes = [AxisResult(k + 1, n) for k, n in enumerate(node_ids)]
@@ -234,6 +236,8 @@ class Sampler(IdlePredicate):
                                                                             "up", "total")])
         self._last_exch = [0] * len(node_ids)
         self._started = [False] * len(node_ids)
+        # the axes still commissioning: each call looks at these only (a finished axis records nothing more)
+        self._open = list(enumerate(zip(self.axes, self._vars)))
 
     def __call__(self) -> bool:
         """Called before each scan (and after the last): True when every axis has finished."""
@@ -242,9 +246,8 @@ class Sampler(IdlePredicate):
         if run:
             t_scan = plc.time_ns - plc.tick_ns      # the scan that just ran
             scan = run - 1
-            for k, (ax, vs) in enumerate(zip(self.axes, self._vars)):
-                if ax.finished:
-                    continue
+            finished = False
+            for k, (ax, vs) in self._open:
                 if ax.up_ns is None and vs["up"].value:
                     ax.up_ns = t_scan
                 phase = phase_name(vs["phase"].value)
@@ -269,13 +272,16 @@ class Sampler(IdlePredicate):
                     cur.t1_ns, cur.scan1 = t_scan + plc.tick_ns, scan + 1
                     cur.exchanges = exch - cur.exch0
                     ax.done, ax.error = bool(vs["done"].value), bool(vs["error"].value)
+                    finished = True
                     if self.progress:
                         self.progress.axis_finished(ax, cur, cur.t1_ns)     # the time the report gives
                 self._last_exch[k] = exch
+            if finished:
+                self._open = [o for o in self._open if not o[1][0].finished]
             if self.progress:
                 self.progress.tick(self, plc.time_ns)
         self.end_call()
-        return all(a.finished for a in self.axes)
+        return not self._open
 
     def close(self) -> None:
         """After the run: an axis still in a phase (timeout, PLC fault) ends it at the last scan."""

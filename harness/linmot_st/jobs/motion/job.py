@@ -108,6 +108,7 @@ class MotionSampler(IdlePredicate):
 
     def __call__(self) -> bool:
         plc = self.plc
+        self.changes_nodes = False      # until _toggle moves a drive's input or conveyor
         if self.begin_call():
             t = plc.time_ns            # the end of the scan that just ran
             for ax, vs in zip(self.axes, self._vars):
@@ -148,6 +149,7 @@ class MotionSampler(IdlePredicate):
         if rec.edge_ns or not vs["armed"].value or drive is None or not self.toggle_inputs:
             return
         rec.edge_ns = t + self._offset(ax.node_id, t) + INPUT_EDGE_DELAY_MS * MS
+        self.changes_nodes = True
         if rec.kind == "cam":               # the conveyor: one cam length in CAM_TURN_MS, then it stops
             from linmot_st.emulator.linmot.master_encoder import SpeedProfile
             cam = self.plan.steps[rec.index - 1].cam
