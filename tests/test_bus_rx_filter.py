@@ -107,7 +107,7 @@ def test_the_demo_puts_the_same_frames_on_the_bus_with_and_without_the_drives_fi
 
     from linmot_st.commission.runner import RunOptions
     from linmot_st.commission.testing import project_build
-    from linmot_st.motion.budget import job_budget
+    from linmot_st.motion.budget import job_budget, job_inputs
     from linmot_st.motion.job import job_drives, motion_phase, run
     from linmot_st.motion.plan import plan as make_plan
     from linmot_st.pvl import load_pvl
@@ -120,7 +120,7 @@ def test_the_demo_puts_the_same_frames_on_the_bus_with_and_without_the_drives_fi
     for filters in (False, True):
         monkeypatch.setattr(bus_pkg, "SimBus", bus_with(filters))
         opts = RunOptions(axes=axes, timings="real")
-        res = run(pvl, opts, build, after=motion_phase(steps, 60.0, None, inhibit),
+        res = run(pvl, opts, build, after=motion_phase(steps, 60.0, None, inhibit, budget_in=job_inputs(axes, 500_000)),
                   drive_factory=job_drives(steps, opts))
         assert res.after is not None and res.after.finished
         out[filters] = res

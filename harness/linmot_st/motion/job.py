@@ -167,24 +167,35 @@ class MotionSampler(IdlePredicate):
         return 0 if now is None else now - plc_t
 
 
-def _write_steps(plc, plan: Plan, inhibit_100us: int = 0) -> None:
-    # every step carries the TxPDO2 inhibit time of the bus budget (linmot_st.motion.budget); SETUP uses it
-    values = [{**s.plc_value(), "INHIBIT100US": inhibit_100us} for s in plan.steps]
+def _write_steps(plc, plan: Plan, inhibit_100us: int = 0, budget_in=None) -> None:
+    # every step carries the TxPDO2 inhibit time of the bus budget (linmot_st.motion.budget); SETUP uses it.
+    # With budget_in, each step its Load and the program the steps' capacity (FB_PlcMotion's bus admission)
+    from .budget import admission_capacity, step_burst, step_load
+
+    def load(kind):
+        if budget_in is None:
+            return {"LOAD": 0, "BURST": 0}
+        return {"LOAD": step_load(kind, budget_in, inhibit_100us), "BURST": step_burst(kind, budget_in)}
+    values = [{**s.plc_value(), "INHIBIT100US": inhibit_100us, **load(s.kind)} for s in plan.steps]
     blank = {"KIND": "PLC_STEP_NONE", "POSITION": 0.0, "VELOCITY": 0.0, "ACCELERATION": 0.0, "CURVEID": 0,
-             "ENTRY": 0, "INHIBIT100US": 0, "HOLD": 0}
+             "ENTRY": 0, "INHIBIT100US": 0, "HOLD": 0, "AMPLITUDE": 0.0, "FREQUENCY": 0.0, "LOAD": 0,
+             "BURST": 0}
     plc[f"{INSTANCE}.STEPS"] = values + [blank] * (MAX_STEPS - len(values))
     plc[f"{INSTANCE}.NSTEPS"] = len(values)
+    plc[f"{INSTANCE}.STEPBUDGET"] = admission_capacity(budget_in) if budget_in is not None else 0
 
 
-def motion_phase(plan: Plan, timeout_s: float, progress=None, inhibit_100us: int = 0, toggle_inputs: bool = True):
+def motion_phase(plan: Plan, timeout_s: float, progress=None, inhibit_100us: int = 0, toggle_inputs: bool = True,
+                 budget_in=None):
     """The `after` hook of the commissioning runner: runs the steps on every commissioned axis, with this TxPDO2
-    inhibit time (the bus budget's, linmot_st.motion.budget)."""
+    inhibit time (the bus budget's, linmot_st.motion.budget); `budget_in` (BudgetInputs): the steps start as the
+    bus has room for them (FB_PlcMotion's admission; None: each as soon as the axis is ready)."""
 
     def after(plc, sim, drives) -> MotionResult:
         from linmot_st.cosim import CoSimTimeout
 
         nodes = list(drives) or list(range(1, plc[f"{INSTANCE}.AXES"] + 1))
-        _write_steps(plc, plan, inhibit_100us)
+        _write_steps(plc, plan, inhibit_100us, budget_in)
         plc[f"{INSTANCE}.RUNMOTION"] = True
         sampler = MotionSampler(plc, nodes, plan, progress, drives, toggle_inputs)
         result = MotionResult(plan, sampler.axes, plc.time_ns)
@@ -277,13 +288,17 @@ def job_drives(plan: Plan, opts: RunOptions, datasets=None):
 
 def run_job(pvl, opts: RunOptions, build_result, plan: Plan, *, dataset=None, progress=None,
             motion_progress=None, timeout_s: float = 60.0, inhibit_100us: int = 0, toggle_inputs: bool = True,
-            **kw) -> RunResult:
+            share_percent: float = 70.0, **kw) -> RunResult:
     """Commission, then move: the commissioning RunResult with the MotionResult in .after (None when the
     commissioning failed). The emulated drives get the mechanics plan.stroke placed (unless the caller passes
-    its own drive_factory); a plan that cannot fit is refused (ValueError) before anything runs."""
+    its own drive_factory); a plan that cannot fit is refused (ValueError) before anything runs. The steps are
+    admitted to the bus within `share_percent` of its bit rate (linmot_st.motion.budget.admission_capacity)."""
+    from .budget import job_inputs
+
     if plan.refusals:
         raise ValueError("the motion plan does not fit the axis: " + "; ".join(plan.refusals))
     if plan.stroke is not None and kw.get("drive_factory") is None:
         kw["drive_factory"] = job_drives(plan, opts, kw.get("datasets"))
     return run(pvl, opts, build_result, dataset=dataset, progress=progress,
-               after=motion_phase(plan, timeout_s, motion_progress, inhibit_100us, toggle_inputs), **kw)
+               after=motion_phase(plan, timeout_s, motion_progress, inhibit_100us, toggle_inputs,
+                                  job_inputs(opts.axes, opts.bitrate, share_percent)), **kw)

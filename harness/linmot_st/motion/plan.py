@@ -42,12 +42,19 @@ CAPTURE_TOLERANCE_MM = 0.001    # the captured position against the trajectory a
 CAM_TURN_MS = 500              # the job turns the conveyor (master encoder) one cam length in this time
 CAM_HOLD_MS = 600               # the PLC keeps the cam coupled this long after InSync (the turn starts 20 ms in)
 CAM_DEMAND_TOLERANCE_MM = 0.001
+STREAM_AMPLITUDE_MM = 10.0      # the PLC's sine: (1 - cos) over this stroke ...
+STREAM_FREQUENCY_HZ = 2.5       # ... at this frequency ...
+STREAM_HOLD_MS = 800            # ... for two periods, one PV setpoint per 2 ms SYNC (FB_LmStream 033xh: the
+                                # configured period 14E6h, 2000 us, keeps the SYNC jitter out, [MC] 4.3.41)
+STREAM_PERIOD_MS = 2            # the SYNC period (plc_project/commission.st's FB_LmSync)
+STREAM_DEMAND_TOLERANCE_MM = 0.001   # the demand against the sine 1.5 periods late (Hermite between setpoints)
 VELOCITY_SLACK_S = 0.1          # the span's margin for the PLC's handshakes and InVelocity's SDO reads
 
 STEP_KINDS = {"setup": "PLC_STEP_SETUP", "power": "PLC_STEP_POWER", "home": "PLC_STEP_HOME",
               "move": "PLC_STEP_MOVE", "curve": "PLC_STEP_CURVE", "ct": "PLC_STEP_CT", "stop": "PLC_STEP_STOP",
               "off": "PLC_STEP_OFF", "jog": "PLC_STEP_JOG", "velocity": "PLC_STEP_VELOCITY",
-              "trigger": "PLC_STEP_TRIGGER", "probe": "PLC_STEP_PROBE", "cam": "PLC_STEP_CAM"}
+              "trigger": "PLC_STEP_TRIGGER", "probe": "PLC_STEP_PROBE", "cam": "PLC_STEP_CAM",
+              "stream": "PLC_STEP_STREAM"}
 
 
 @dataclass
@@ -109,11 +116,13 @@ class Step:
     hold_ms: int = 0                                 # jog, velocity: T_PlcStep.Hold
     reach_mm: tuple[float, float] | None = None      # jog, velocity: how far back / forward it may go from
                                                      # where the step starts (no target: a bound)
+    amplitude_mm: float = 0.0                        # stream: the PLC's sine
+    frequency_hz: float = 0.0
 
     def plc_value(self) -> dict:
         return {"KIND": STEP_KINDS[self.kind], "POSITION": self.position_mm, "VELOCITY": self.velocity,
                 "ACCELERATION": self.acceleration, "CURVEID": self.curve_id, "ENTRY": self.entry,
-                "HOLD": self.hold_ms * 1_000_000}
+                "HOLD": self.hold_ms * 1_000_000, "AMPLITUDE": self.amplitude_mm, "FREQUENCY": self.frequency_hz}
 
 
 @dataclass
@@ -164,13 +173,15 @@ def _lacking(c, others) -> list:
     return [o for o in others if not any(oc.curve_id == c.curve_id and _same_curve(oc, c) for oc in o.curves)]
 
 
-def plan(pvl, position_mm: float = 50.0, settings=None, others=(), fb_steps: bool = True) -> Plan:
+def plan(pvl, position_mm: float = 50.0, settings=None, others=(), fb_steps: bool = True,
+         stream: bool = True) -> Plan:
     """The steps; `settings`: the emulated drives' MotionSettings whose stroke the plan is fitted into.
     `others`: the PVL files of other nodes on the bus (per-node datasets; every axis runs the same steps): a
     curve or command-table step only where each of them holds the same curve or command table (a B1100 file
     holds neither). `fb_steps` False: without the jog, velocity, trigger, probe and cam steps (the job as it was
     before them: their parameter writes and SDO reads start on every axis in the same scan, a burst the bus
-    budget does not plan, docs/motion.md)."""
+    budget does not plan, docs/motion.md). `stream` False: without the PLC-streamed profile (it needs a PLC
+    that keeps its 2 ms SYNC: not a Python PLC in real time on a python-can bus)."""
     steps = [Step("setup", "set up the PDOs (TxPDO1 event timer 50 ms)"), Step("power", "power (MC_Power)"),
              Step("home", "home (MC_Home)")]
     not_run: list[str] = []
@@ -182,9 +193,13 @@ def plan(pvl, position_mm: float = 50.0, settings=None, others=(), fb_steps: boo
         # the trigger, probe and cam rows of the catalogue are E1100 only (seed 004 4.2 has no B1100 mark for
         # them, [MC] 5.5: no cams on a B1100), and every axis runs the same steps
         fb_steps = False
-        not_run.append("jog, velocity, trigger, probe and cam steps: not on every axis (a B1100 node: "
+        not_run.append("jog, velocity, trigger, probe, stream and cam steps: not on every axis (a B1100 node: "
                        f"{', '.join(f.filename or 'PVL' for f in b1100)})")
     steps += _jog_and_velocity() if fb_steps else []
+    if fb_steps and not stream:
+        steps = [s for s in steps if s.kind != "stream"]
+        not_run.append("the PLC-streamed profile: the PLC runs in real time on this bus, its scans too late for a "
+                       f"{STREAM_PERIOD_MS} ms SYNC stream (the drive's 1.5-period margin)")
     offset = _param(pvl, P_CURVE_OFFSET, 0)
     time_scale = _param(pvl, P_CURVE_TIME_SCALE, 10000)
     amplitude = _param(pvl, P_CURVE_AMPLITUDE, 1000) / 1000.0
@@ -261,7 +276,13 @@ def _jog_and_velocity() -> list[Step]:
             # 02Axh: the target only (01Axh's 16 bytes do not fit the RxPDOs); at the velocity move's 14BEh..14C0h
             Step("trigger", f"move to {TRIGGER_POSITION_MM:g} mm on trigger X4.6 (02Axh), the job raises it",
                  position_mm=TRIGGER_POSITION_MM, target_mm=TRIGGER_POSITION_MM),
-            Step("probe", "touch probe on X4.5 (MC_TouchProbe), the job pulses it")]
+            Step("probe", "touch probe on X4.5 (MC_TouchProbe), the job pulses it"),
+            # where the trigger step left the axis, the sine's base
+            Step("stream", f"stream a {STREAM_AMPLITUDE_MM:g} mm sine at {STREAM_FREQUENCY_HZ:g} Hz computed by the "
+                           f"PLC, one PV setpoint per {STREAM_PERIOD_MS} ms SYNC (FB_LmStream, 033xh)",
+                 position_mm=TRIGGER_POSITION_MM, target_mm=TRIGGER_POSITION_MM, hold_ms=STREAM_HOLD_MS,
+                 amplitude_mm=STREAM_AMPLITUDE_MM, frequency_hz=STREAM_FREQUENCY_HZ,
+                 span_mm=(TRIGGER_POSITION_MM, TRIGGER_POSITION_MM + STREAM_AMPLITUDE_MM))]
 
 
 def _spans(steps: list[Step]) -> None:
@@ -270,7 +291,7 @@ def _spans(steps: list[Step]) -> None:
     from where the axis may be (an interval: they have no target) over how far it may go."""
     here = None                     # (lowest, highest) where the axis may be
     for s in steps:
-        if s.kind in ("move", "trigger") or (s.kind == "ct" and s.span_mm is not None):
+        if s.kind in ("move", "trigger", "stream") or (s.kind == "ct" and s.span_mm is not None):
             pts = [s.target_mm] + (list(here) if here is not None else []) + (list(s.span_mm) if s.span_mm else [])
             s.span_mm = (min(pts), max(pts))
         elif s.reach_mm is not None and here is not None:
