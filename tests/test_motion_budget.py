@@ -109,7 +109,8 @@ def test_the_job_refuses_a_configuration_that_cannot_fit(capsys):
 def test_many_axes_move_within_the_budget():
     """20 axes at 1 Mbit/s (on main, 17 and more failed with CommandTimeout on a 98 % loaded bus): every step
     passes, the drives honour the inhibit time the budget chose, and the load after the PDO setup stays within
-    the share in every 100 ms, the FB steps' bursts (jog, velocity, probe, stream) included: FB_PlcMotion starts a step once the bus has room for its load (before that admission:
+    the share in every 100 ms, the FB steps' bursts (jog, velocity, probe, stream, the PLC's command-table
+    writes) included: FB_PlcMotion starts a step once the bus has room for its load (before that admission:
     80..90 % in the busiest 100 ms, docs/motion.md)."""
     from linmot_st.commission.project import build_project, prepare
     from linmot_st.commission.runner import RunOptions
@@ -124,7 +125,7 @@ def test_many_axes_move_within_the_budget():
     _, budget = job_budget(axes, bitrate)
     assert budget.fits and budget.interval_100us > 0
     p = plan(pvl)
-    assert {"jog", "velocity", "probe", "stream", "cam"} <= {s.kind for s in p.steps}
+    assert {"jog", "velocity", "probe", "stream", "cam", "ctwrite", "ctloop"} <= {s.kind for s in p.steps}
     res = run_job(pvl, RunOptions(axes=axes, bitrate=bitrate, timings="fast"),
                   build_project(prepare(pvl, EXAMPLE.name)), p, inhibit_100us=budget.interval_100us)
     m = res.after

@@ -128,10 +128,12 @@ def job_budget(axes: int, bitrate: int, share_percent: float = 70.0) -> tuple[Bu
 # (plc_project/motion.st; measured per axis and step on the demo, docs/motion.md "Bus admission"):
 #   commands: motion commands (RxPDO2 + RxPDO3, and two TxPDO1 state-var changes each) in those 100 ms: one for a
 #     move, curve, command table, stop, trigger, cam; FB_LmJog and FB_LmMoveVelocity write the predefined VA
-#     interpolator's parameters first (st_lib/motion/jog.st, velocity.st: four 002xh writes);
+#     interpolator's parameters first (st_lib/motion/jog.st, velocity.st: four 002xh writes); the PLC's
+#     command-table loop runs in the drive (one command starts it);
 #   sdo: SDO exchanges (request and answer, 8 bytes each) in those 100 ms: MC_MoveVelocity reads the demand
 #     velocity 1BAEh at its edge and until InVelocity (measured: 8 in the velocity step), MC_TouchProbe's reads
-#     (8);
+#     (8); the CTWRITE step writes 8 entries of 64 bytes in 2-byte SDO writes, one exchange per scan (measured:
+#     101 in its busiest 100 ms);
 #   moving: the axis moves (TxPDO2 at its inhibit time, the MC cycle at the least);
 #   stream: PDOs on a 2 ms SYNC (the STREAM step: the setpoint's RxPDO2 + RxPDO3 each SYNC, TxPDO1 and TxPDO2
 #     every STREAM_SYNC_EVERY-th SYNC, the SYNC frame itself): stream_bits(). A stream is admitted alone
@@ -144,7 +146,7 @@ STREAM_SYNC_EVERY = 5
 STEP_TRAFFIC = {                     # kind: (commands, sdo exchanges, moving) in the busiest 100 ms
     "home": (1, 0, True), "move": (1, 0, True), "curve": (1, 0, True), "ct": (1, 0, True), "stop": (1, 0, True),
     "trigger": (2, 0, True), "cam": (3, 0, True), "jog": (4, 0, True), "velocity": (4, 8, True),
-    "probe": (0, 8, False), "stream": (0, 0, False),
+    "probe": (0, 8, False), "stream": (0, 0, False), "ctwrite": (0, 100, False), "ctloop": (1, 0, True),
 }
 
 

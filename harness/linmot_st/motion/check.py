@@ -113,6 +113,10 @@ def check_motion(result, plan: Plan, drives: dict) -> MotionCheck:
                 out.steps.append(_check_cam(ax, rec, step, drive))
             elif step.kind == "stream":
                 out.steps.append(_check_stream(ax, rec, step, drive))
+            elif step.kind == "ctwrite":
+                out.steps.append(_check_ct_write(ax, rec, step, drive))
+            elif step.kind == "ctloop":
+                out.steps.append(_check_ct_loop(ax, rec, step, drive, end))
             elif step.kind == "trigger":
                 out.steps.append(_check_trigger(ax, rec, step, traj, end))
             elif step.kind == "probe":
@@ -249,3 +253,52 @@ def _check_stream(ax, rec, step: Step, drive) -> StepCheck:
                      f"{len(sent)} setpoints; the demand within {dem:.4f} mm of the PLC's sine 1.5 periods late "
                      f"(tolerance {STREAM_DEMAND_TOLERANCE_MM} mm), {len(samples)} samples", demand_dev_mm=dem,
                      t_exec_ns=zero - rec.off0_ns)
+
+
+def ct_loop_strokes(samples, out_pu: int, back_pu: int) -> int:
+    """How often the demand reached the outer end coming from the inner one (within 0.1 um)."""
+    n, out = 0, False
+    for smp in samples:
+        if not out and smp.demand >= out_pu - 1:
+            n, out = n + 1, True
+        elif out and smp.demand <= back_pu + 1:
+            out = False
+    return n
+
+
+def ct_loop_program(step: Step) -> dict[int, bytes]:
+    """The entries the PLC's CTWRITE step writes (plc_project/motion.st), as the catalogue encodes them."""
+    from linmot_st.emulator.linmot.command_table import build_entry     # the entry layout (seeds table 10)
+
+    base, vad = step.entry, dict(vmax=round(step.velocity * 1000), acc=round(step.acceleration * 100),
+                                 dec=round(step.acceleration * 100))
+    rows = [(C.SET_CT_VAR1, dict(value=0)), (C.VAI_GO_TO_POS, dict(target=round(step.position_mm * MM), **vad)),
+            (C.WAIT_MOTION_FINISHED, {}), (C.VAI_GO_TO_POS, dict(target=round(step.back_mm * MM), **vad)),
+            (C.WAIT_MOTION_FINISHED, {}), (C.ADD_CT_VAR1, dict(value=1)),
+            (C.IF_VAR1_LESS, dict(value=step.count, if_true=base + 1, if_false=base + 7)), (C.WAIT_MOTION_FINISHED, {})]
+    return {base + k: build_entry(cid << 4, C.encode(cid, 0, **f)[2:], name="PLC loop",
+                                  link=0xFFFF if k >= 6 else base + k + 1)
+            for k, (cid, f) in enumerate(rows)}
+
+
+def _check_ct_write(ax, rec, step: Step, drive) -> StepCheck:
+    """The PLC's program on the drive (RAM), entry by entry as the catalogue encodes it."""
+    want, have = ct_loop_program(step), drive.ct.ram
+    bad = [k for k, block in want.items() if have.get(k) != block]
+    return StepCheck(ax.axis, rec.index, "ctwrite", not bad,
+                     f"entries {min(want)}..{max(want)} on the drive as the catalogue encodes the program"
+                     if not bad else f"entries {bad} differ from the program as the catalogue encodes it")
+
+
+def _check_ct_loop(ax, rec, step: Step, drive, end) -> StepCheck:
+    """The PLC's command-table program run: the stroke as often as it counts on the trajectory, the axis back at
+    the inner end."""
+    n = step.count
+    out_pu, back_pu = round(step.position_mm * MM), round(step.back_mm * MM)
+    t0, t1 = rec.t0_ns + rec.off0_ns, rec.t1_ns + rec.off1_ns
+    strokes = ct_loop_strokes(drive.mc.trajectory.between(t0, t1), out_pu, back_pu)
+    reached = end.actual / MM
+    ok = strokes == n and abs(reached - step.back_mm) <= POSITION_TOLERANCE_MM
+    return StepCheck(ax.axis, rec.index, "ctloop", ok,
+                     f"{strokes} stroke(s) out to {step.position_mm:g} mm (the program counts {n}), at {reached:.3f} "
+                     f"mm, target {step.back_mm:g} mm (tolerance {POSITION_TOLERANCE_MM} mm)", reached_mm=reached)

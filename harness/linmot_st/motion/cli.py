@@ -112,6 +112,11 @@ def run_command(args: argparse.Namespace) -> int:
         changed = sorted({u for ps in result.after.ram_changed.values() for u in ps})
         print("RAM parameters the motion steps wrote (checked above as commissioned): "
               + ", ".join(f"{u:04X}h" for u in changed))
+    if result.after is not None and result.after.ct_changed:
+        entries = sorted({k for es in result.after.ct_changed.values() for k in es})
+        print(f"command-table entries the motion steps wrote to RAM (checked above as commissioned): "
+              f"{entries[0]}..{entries[-1]}" if entries == list(range(entries[0], entries[-1] + 1))
+              else ", ".join(map(str, entries)))
     if result.after is not None:
         check = check_motion(result.after, plan, result.drives)
         motion = MotionReport(result.after, check, result.trace, result.drives)

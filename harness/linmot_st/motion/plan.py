@@ -49,12 +49,19 @@ STREAM_HOLD_MS = 800            # ... for two periods, one PV setpoint per 2 ms 
 STREAM_PERIOD_MS = 2            # the SYNC period (plc_project/commission.st's FB_LmSync)
 STREAM_DEMAND_TOLERANCE_MM = 0.001   # the demand against the sine 1.5 periods late (Hermite between setpoints)
 VELOCITY_SLACK_S = 0.1          # the span's margin for the PLC's handshakes and InVelocity's SDO reads
+CT_LOOP_ENTRIES = 8             # the PLC's command-table program (plc_project/motion.st, CTWRITE) ...
+CT_LOOP_FIRST_ENTRY = 200       # ... from the first entry at or above this with 8 entries no PVL file uses
+CT_LOOP_OUT_MM = 30.0           # out to here and back ...
+CT_LOOP_BACK_MM = 10.0
+CT_LOOP_COUNT = 3               # ... this many times (IF Var1 < 3)
+CT_LOOP_VELOCITY = 250.0        # mm/s
+CT_LOOP_ACCELERATION = 5000.0   # mm/s^2 (and deceleration)
 
 STEP_KINDS = {"setup": "PLC_STEP_SETUP", "power": "PLC_STEP_POWER", "home": "PLC_STEP_HOME",
               "move": "PLC_STEP_MOVE", "curve": "PLC_STEP_CURVE", "ct": "PLC_STEP_CT", "stop": "PLC_STEP_STOP",
               "off": "PLC_STEP_OFF", "jog": "PLC_STEP_JOG", "velocity": "PLC_STEP_VELOCITY",
               "trigger": "PLC_STEP_TRIGGER", "probe": "PLC_STEP_PROBE", "cam": "PLC_STEP_CAM",
-              "stream": "PLC_STEP_STREAM"}
+              "stream": "PLC_STEP_STREAM", "ctwrite": "PLC_STEP_CTWRITE", "ctloop": "PLC_STEP_CT"}
 
 
 @dataclass
@@ -118,11 +125,14 @@ class Step:
                                                      # where the step starts (no target: a bound)
     amplitude_mm: float = 0.0                        # stream: the PLC's sine
     frequency_hz: float = 0.0
+    back_mm: float = 0.0                             # ctwrite, ctloop: the inner end of the program's stroke
+    count: int = 0                                   # ctwrite, ctloop: the strokes it counts
 
     def plc_value(self) -> dict:
         return {"KIND": STEP_KINDS[self.kind], "POSITION": self.position_mm, "VELOCITY": self.velocity,
                 "ACCELERATION": self.acceleration, "CURVEID": self.curve_id, "ENTRY": self.entry,
-                "HOLD": self.hold_ms * 1_000_000, "AMPLITUDE": self.amplitude_mm, "FREQUENCY": self.frequency_hz}
+                "HOLD": self.hold_ms * 1_000_000, "AMPLITUDE": self.amplitude_mm, "FREQUENCY": self.frequency_hz,
+                "BACK": self.back_mm, "COUNT": self.count}
 
 
 @dataclass
@@ -164,6 +174,18 @@ def _ct_chain(pvl, entry: int, scale_pos: int) -> tuple[list[int], list[int] | N
     return chain, targets or None
 
 
+def ct_loop_entry(pvl, others=()) -> int:
+    """The first of CT_LOOP_ENTRIES consecutive command-table entries, from CT_LOOP_FIRST_ENTRY on, that no PVL
+    file of the bus writes at commissioning (the PLC's program must not overwrite the file's entries)."""
+    used = {e.entry_id for f in (pvl, *others) for e in f.command_table}
+    base = CT_LOOP_FIRST_ENTRY
+    while any(k in used for k in range(base, base + CT_LOOP_ENTRIES)):
+        base += 1
+    if base + CT_LOOP_ENTRIES > 256:
+        raise ValueError(f"no {CT_LOOP_ENTRIES} free command-table entries from {CT_LOOP_FIRST_ENTRY} on")
+    return base
+
+
 def _same_curve(a, b) -> bool:
     return a.info_block == b.info_block and list(a.setpoints) == list(b.setpoints)
 
@@ -193,7 +215,8 @@ def plan(pvl, position_mm: float = 50.0, settings=None, others=(), fb_steps: boo
         # the trigger, probe and cam rows of the catalogue are E1100 only (seed 004 4.2 has no B1100 mark for
         # them, [MC] 5.5: no cams on a B1100), and every axis runs the same steps
         fb_steps = False
-        not_run.append("jog, velocity, trigger, probe, stream and cam steps: not on every axis (a B1100 node: "
+        not_run.append("jog, velocity, trigger, probe, stream, cam and command-table loop steps: not on every axis "
+                       "(a B1100 node: "
                        f"{', '.join(f.filename or 'PVL' for f in b1100)})")
     steps += _jog_and_velocity() if fb_steps else []
     if fb_steps and not stream:
@@ -247,6 +270,16 @@ def plan(pvl, position_mm: float = 50.0, settings=None, others=(), fb_steps: boo
     else:
         if table:
             not_run.append("command table: no entry whose sequence is absolute VAI moves and waits only")
+    if fb_steps:
+        entry = ct_loop_entry(pvl, others)
+        # the PLC writes its program (SDO, CTWRITE), then starts it as any command-table entry (200xh, CT)
+        loop = dict(entry=entry, position_mm=CT_LOOP_OUT_MM, back_mm=CT_LOOP_BACK_MM, count=CT_LOOP_COUNT,
+                    velocity=CT_LOOP_VELOCITY, acceleration=CT_LOOP_ACCELERATION)
+        steps += [Step("ctwrite", f"the PLC writes a command-table loop to entries {entry}..{entry + CT_LOOP_ENTRIES - 1}"
+                                  f" (Var1, IF Var1 < {CT_LOOP_COUNT})", **loop),
+                  Step("ctloop", f"start the PLC's loop (entry {entry}): {CT_LOOP_COUNT} x out to "
+                                 f"{CT_LOOP_OUT_MM:g} mm and back to {CT_LOOP_BACK_MM:g} mm", target_mm=CT_LOOP_BACK_MM,
+                       span_mm=(CT_LOOP_BACK_MM, CT_LOOP_OUT_MM), **loop)]
     steps += [Step("stop", "stop (MC_Stop)", acceleration=STOP_DECELERATION), Step("off", "switch off")]
     if len(steps) > MAX_STEPS:
         dropped = steps[MAX_STEPS - 2:-2]
@@ -291,7 +324,7 @@ def _spans(steps: list[Step]) -> None:
     from where the axis may be (an interval: they have no target) over how far it may go."""
     here = None                     # (lowest, highest) where the axis may be
     for s in steps:
-        if s.kind in ("move", "trigger", "stream") or (s.kind == "ct" and s.span_mm is not None):
+        if s.kind in ("move", "trigger", "stream", "ctloop") or (s.kind == "ct" and s.span_mm is not None):
             pts = [s.target_mm] + (list(here) if here is not None else []) + (list(s.span_mm) if s.span_mm else [])
             s.span_mm = (min(pts), max(pts))
         elif s.reach_mm is not None and here is not None:
