@@ -127,9 +127,9 @@ def job_budget(axes: int, bitrate: int, share_percent: float = 70.0) -> tuple[Bu
 # What one axis puts on the bus in a step of the motion job beyond what an idle axis sends, in its busiest 100 ms
 # (plc_project/motion.st; measured per axis and step on the demo, docs/motion.md "Bus admission"):
 #   commands: motion commands (RxPDO2 + RxPDO3, and two TxPDO1 state-var changes each) in those 100 ms: one for a
-#     move, curve, command table, stop, trigger, cam; FB_LmJog and FB_LmMoveVelocity write the predefined VA
-#     interpolator's parameters first (st_lib/motion/jog.st, velocity.st: four 002xh writes); the PLC's
-#     command-table loop runs in the drive (one command starts it);
+#     move, curve, command table (the PLC's loop runs in the drive: one command starts it); the trigger's two
+#     (02Axh, 008xh), the cam's three; FB_LmJog and FB_LmMoveVelocity write the predefined VA interpolator's
+#     parameters first (st_lib/motion/jog.st, velocity.st: four 002xh writes);
 #   sdo: SDO exchanges (request and answer, 8 bytes each) in those 100 ms: MC_MoveVelocity reads the demand
 #     velocity 1BAEh at its edge and until InVelocity (measured: 8 in the velocity step), MC_TouchProbe's reads
 #     (8); the CTWRITE step writes 8 entries of 64 bytes in 2-byte SDO writes, one exchange per scan (measured:
@@ -144,7 +144,8 @@ def job_budget(axes: int, bitrate: int, share_percent: float = 70.0) -> tuple[Bu
 STREAM_SYNC_PERIOD_US = 2000
 STREAM_SYNC_EVERY = 5
 STEP_TRAFFIC = {                     # kind: (commands, sdo exchanges, moving) in the busiest 100 ms
-    "home": (1, 0, True), "move": (1, 0, True), "curve": (1, 0, True), "ct": (1, 0, True), "stop": (1, 0, True),
+    # not "stop": a stop ends a motion (the velocity move runs until it) and is never held back
+    "home": (1, 0, True), "move": (1, 0, True), "curve": (1, 0, True), "ct": (1, 0, True),
     "trigger": (2, 0, True), "cam": (3, 0, True), "jog": (4, 0, True), "velocity": (4, 8, True),
     "probe": (0, 8, False), "stream": (0, 0, False), "ctwrite": (0, 100, False), "ctloop": (1, 0, True),
 }
@@ -180,7 +181,8 @@ def step_burst(kind: str, inp: BudgetInputs) -> int:
         return 0
     commands, sdo, _ = STEP_TRAFFIC[kind]
     b8 = frame_bits(8)
-    return 10 * (commands * (2 * b8 + frame_bits(inp.rx3_bytes)) + 2 * sdo * b8)     # per 100 ms -> per s
+    # a command: RxPDO2, RxPDO3 and its two TxPDO1 state-var changes (accepted, done); an SDO exchange: 2 frames
+    return 10 * (commands * (3 * b8 + frame_bits(inp.rx3_bytes)) + 2 * sdo * b8)     # per 100 ms -> per s
 
 
 def stream_bits(inp: BudgetInputs) -> int:
