@@ -120,7 +120,7 @@ def capacity(bitrate: int, share_percent: float = 70.0) -> dict:
     pvl = load_pvl(EXAMPLE)
     steps = make_plan(pvl, 50.0)
     res = run_job(pvl, RunOptions(axes=axes, bitrate=bitrate, timings="fast"), build_project(prepare(pvl, EXAMPLE.name)),
-                  steps, inhibit_100us=budget.interval_100us)
+                  steps, inhibit_100us=budget.interval_100us, timeout_s=120.0)
     m = res.after
     passed = m is not None and m.finished and check_motion(m, steps, res.drives).passed
     mean, peak = m.bus_load if m is not None and m.bus_load else (0.0, 0.0)

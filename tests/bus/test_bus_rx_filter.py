@@ -106,7 +106,7 @@ def test_the_demo_puts_the_same_frames_on_the_bus_with_and_without_the_drives_fi
     from linmot_st.jobs.commission import runner as runner_mod
     from linmot_st.jobs.commission.runner import RunOptions
     from linmot_st.jobs.commission.testing import project_build
-    from linmot_st.jobs.motion.budget import job_budget
+    from linmot_st.jobs.motion.budget import job_budget, job_inputs
     from linmot_st.jobs.motion.job import job_drives, motion_phase, run
     from linmot_st.jobs.motion.plan import plan as make_plan
     from linmot_st.pvl import load_pvl
@@ -119,7 +119,7 @@ def test_the_demo_puts_the_same_frames_on_the_bus_with_and_without_the_drives_fi
     for filters in (False, True):
         monkeypatch.setattr(runner_mod, "SimBus", bus_with(filters))       # the bus the run makes
         opts = RunOptions(axes=axes, timings="real")
-        res = run(pvl, opts, build, after=motion_phase(steps, 60.0, None, inhibit),
+        res = run(pvl, opts, build, after=motion_phase(steps, 60.0, None, inhibit, budget_in=job_inputs(axes, 500_000)),
                   drive_factory=job_drives(steps, opts))
         assert res.after is not None and res.after.finished
         out[filters] = res

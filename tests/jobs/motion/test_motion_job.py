@@ -13,7 +13,7 @@ from linmot_st.jobs.commission.runner import RunOptions
 from linmot_st.protocol import commands as C
 from linmot_st.jobs.motion.check import check_motion
 from linmot_st.jobs.motion.job import run_job
-from linmot_st.jobs.motion.plan import CURVE_DEMAND_TOLERANCE_MM, plan
+from linmot_st.jobs.motion.plan import CURVE_DEMAND_TOLERANCE_MM, STREAM_DEMAND_TOLERANCE_MM, plan
 from linmot_st.pvl import load_pvl
 from repo_paths import EXAMPLES
 
@@ -34,8 +34,8 @@ def build(pvl):
 def test_plan_from_the_example(pvl):
     p = plan(pvl, 40.0)
     assert [s.kind for s in p.steps] == ["setup", "power", "home", "move", "jog", "jog", "velocity", "stop",
-                                         "trigger", "probe", "cam", "move", "curve", "move", "curve", "ct", "stop",
-                                         "off"]
+                                         "trigger", "probe", "stream", "cam", "move", "curve", "move", "curve", "ct",
+                                         "ctwrite", "ctloop", "stop", "off"]
     assert p.steps[3].target_mm == 40.0
     curves = [s for s in p.steps if s.kind == "curve"]
     assert [s.curve_id for s in curves] == [23, 1]
@@ -50,6 +50,10 @@ def test_plan_from_the_example(pvl):
     assert cam.cam.position(0, 0) == 0 and max(cam.cam.position(n, 0) for n in range(4097)) == pytest.approx(
         49984, abs=1)
     assert [s.kind for s in plan(pvl, fb_steps=False).steps].count("cam") == 0
+    # the PLC's command-table loop: 8 entries from 200 on, none of the file's (1..3), started as a CT step
+    write, loop = (next(s for s in p.steps if s.kind == k) for k in ("ctwrite", "ctloop"))
+    assert write.entry == loop.entry == 200 and not {e.entry_id for e in pvl.command_table} & set(range(200, 208))
+    assert loop.plc_value()["KIND"] == "PLC_STEP_CT" and loop.count == 3 and loop.target_mm == 10.0
 
 
 def test_job_on_two_axes_checks_every_step(pvl, build):
@@ -67,6 +71,22 @@ def test_job_on_two_axes_checks_every_step(pvl, build):
             node = s.axis
             frames = [e for e in res.trace if e.frame.can_id == 0x400 + node and e.end_ns == s.t_exec_ns]
             assert frames and C.command_id(int.from_bytes(frames[0].frame.data[:2], "little")) == C.TIME_CURVE
+        if s.kind == "stream":                  # the PLC's sine, one setpoint per 2 ms SYNC for 800 ms
+            assert s.demand_dev_mm <= STREAM_DEMAND_TOLERANCE_MM and s.what.startswith("400 setpoints")
+        if s.kind == "ctloop":                  # the loop the PLC wrote ran as often as it counts
+            assert s.what.startswith("3 stroke(s) out to 30 mm")
+    # the PLC wrote its program through the configuration services: the drive holds it (RAM) as the catalogue
+    # encodes it; a plan that expects another count fails both CT steps (the checks can fail)
+    from dataclasses import replace
+    steps4 = [replace(s, count=4) if s.kind in ("ctwrite", "ctloop") else s for s in p.steps]
+    chk4 = check_motion(m, replace(p, steps=steps4), res.drives)
+    assert {(s.kind, s.ok) for s in chk4.steps if s.kind in ("ctwrite", "ctloop")} == {("ctwrite", False),
+                                                                                       ("ctloop", False)}
+    assert all(s.ok for s in chk4.steps if s.kind not in ("ctwrite", "ctloop"))
+    # the SYNC producer ran only for the stream steps: 80h frames about every 2 ms of them, none before
+    syncs = [e.start_ns for e in res.trace if e.frame.can_id == 0x080]
+    streams = [r for ax in m.axes for r in ax.steps if r.kind == "stream"]
+    assert syncs and min(syncs) >= min(r.t0_ns for r in streams) and max(syncs) <= max(r.t1_ns for r in streams)
     # the PLC's steps came one after the other, the curve steps took at least their curve time
     for ax in m.axes:
         assert [r.index for r in ax.steps] == list(range(1, len(p.steps) + 1))
@@ -103,7 +123,7 @@ def test_motion_command_writes_the_reports(tmp_path, capsys):
     assert "motion job: PASSED" in out.out and "not run:" not in out.out
     assert "axis 1: step 3 home (MC_Home)" in out.err
     fig = json.loads((report / "motion.json").read_text())
-    assert fig["passed"] and len(fig["rows"]) == 36 and all(r["ok"] for r in fig["rows"])
+    assert fig["passed"] and len(fig["rows"]) == 42 and all(r["ok"] for r in fig["rows"])
     assert fig["rows"][3]["label"] == "move to 30 mm"
     for name in ("report.md", "report.json", "can.log", "motion.md", "motion-axis1.png", "motion-axis2.png"):
         assert (report / name).exists(), name
@@ -125,7 +145,8 @@ def test_motion_job_on_python_can_virtual_bus(pvl, build):
     measured again. What must hold is what the job checks (every step, in order) and no false success."""
     from realtime import retry_after_stall
 
-    p = plan(pvl)
+    p = plan(pvl, stream=False)             # a Python PLC in real time cannot keep a 2 ms SYNC stream
+    assert "stream" not in [s.kind for s in p.steps] and "PLC-streamed" in p.not_run[-1]
 
     def attempt():
         res = run_job(pvl, RunOptions(axes=1, bus="virtual"), build, p)

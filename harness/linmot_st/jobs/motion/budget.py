@@ -125,6 +125,82 @@ def job_budget(axes: int, bitrate: int, share_percent: float = 70.0) -> tuple[Bu
     return inp, b
 
 
+# ------------------------------------------------------------------ the steps' admission (the FB steps' bursts)
+# What one axis puts on the bus in a step of the motion job beyond what an idle axis sends, in its busiest 100 ms
+# (plc_project/motion.st; measured per axis and step on the demo, docs/motion.md "Bus admission"):
+#   commands: motion commands (RxPDO2 + RxPDO3, and two TxPDO1 state-var changes each) in those 100 ms: one for a
+#     move, curve, command table (the PLC's loop runs in the drive: one command starts it); the trigger's two
+#     (02Axh, 008xh), the cam's three; FB_LmJog and FB_LmMoveVelocity write the predefined VA interpolator's
+#     parameters first (st_lib/motion/jog.st, velocity.st: four 002xh writes);
+#   sdo: SDO exchanges (request and answer, 8 bytes each) in those 100 ms: MC_MoveVelocity reads the demand
+#     velocity 1BAEh at its edge and until InVelocity (measured: 8 in the velocity step), MC_TouchProbe's reads
+#     (8); the CTWRITE step writes 8 entries of 64 bytes in 2-byte SDO writes, one exchange per scan (measured:
+#     101 in its busiest 100 ms);
+#   moving: the axis moves (TxPDO2 at its inhibit time, the MC cycle at the least);
+#   stream: PDOs on a 2 ms SYNC (the STREAM step: the setpoint's RxPDO2 + RxPDO3 each SYNC, TxPDO1 and TxPDO2
+#     every STREAM_SYNC_EVERY-th SYNC, the SYNC frame itself): stream_bits(). A stream is admitted alone
+#     (step_load: the whole capacity): the drive needs its SYNC and each setpoint within the 2 ms period, and the
+#     PLC sends its frames through one transmit queue, so a burst of other axes' commands queued ahead of them
+#     (four axes starting a move in one scan: 2 ms of frames at 500 kbit/s) delays the SYNC by a period and ends
+#     the stream in 0083h (measured: 16 and 20 axes at 500 kbit/s with the streams admitted by their rate).
+STREAM_SYNC_PERIOD_US = 2000
+STREAM_SYNC_EVERY = 5
+STEP_TRAFFIC = {                     # kind: (commands, sdo exchanges, moving) in the busiest 100 ms
+    # not "stop": a stop ends a motion (the velocity move runs until it) and is never held back
+    "home": (1, 0, True), "move": (1, 0, True), "curve": (1, 0, True), "ct": (1, 0, True),
+    "trigger": (2, 0, True), "cam": (3, 0, True), "jog": (4, 0, True), "velocity": (4, 8, True),
+    "probe": (0, 8, False), "stream": (0, 0, False), "ctwrite": (0, 100, False), "ctloop": (1, 0, True),
+}
+
+
+def idle_axis_bits(inp: BudgetInputs) -> int:
+    """Bits per second of an axis that stands: TxPDO1 once per event timer, the control word once per refresh."""
+    tx1 = 1_000_000 // inp.tx1_event_ms if inp.tx1_event_ms > 0 else 0
+    cw = 1_000_000 // inp.refresh_ms if inp.refresh_ms > 0 else 0
+    return (tx1 * frame_bits(8) + cw * frame_bits(2) + 999) // 1000
+
+
+def step_load(kind: str, inp: BudgetInputs, interval_100us: int) -> int:
+    """Bits per second an axis in a step of this kind adds to an idle axis' (0: a step the admission lets pass:
+    setup, power, off, whose traffic precedes the process data or is a single frame)."""
+    if kind not in STEP_TRAFFIC:
+        return 0
+    moving = STEP_TRAFFIC[kind][2]
+    b8 = frame_bits(8)
+    bits = step_burst(kind, inp)
+    if moving:
+        bits += 1_000_000 // max(interval_100us * 100, inp.mc_cycle_us) * b8
+    if kind == "stream":
+        return max(admission_capacity(inp), stream_bits(inp))
+    return bits
+
+
+def step_burst(kind: str, inp: BudgetInputs) -> int:
+    """The part of step_load that is the step's commands and SDO exchanges (per 100 ms, as bits per second): what
+    a step shorter than 100 ms leaves on the bus after its end, which FB_PlcMotion keeps planned until 100 ms
+    after the step's admission (a moving step's TxPDO2 ends with its motion)."""
+    if kind not in STEP_TRAFFIC:
+        return 0
+    commands, sdo, _ = STEP_TRAFFIC[kind]
+    b8 = frame_bits(8)
+    # a command: RxPDO2, RxPDO3 and its two TxPDO1 state-var changes (accepted, done); an SDO exchange: 2 frames
+    return 10 * (commands * (3 * b8 + frame_bits(inp.rx3_bytes)) + 2 * sdo * b8)     # per 100 ms -> per s
+
+
+def stream_bits(inp: BudgetInputs) -> int:
+    """Bits per second of one axis streaming on the 2 ms SYNC (with the SYNC frames)."""
+    syncs = 1_000_000 // STREAM_SYNC_PERIOD_US
+    return (syncs * (frame_bits(8) + frame_bits(inp.rx3_bytes) + frame_bits(0))
+            + syncs // STREAM_SYNC_EVERY * 2 * frame_bits(8))
+
+
+def admission_capacity(inp: BudgetInputs) -> int:
+    """Bits per second the steps may add on top of every axis standing: the share of the bit rate less the idle
+    axes' process data. plc_project's FB_PlcMotion starts a step once the steps running on the other axes leave
+    room for its step_load (in the order the axes asked; a step alone always runs)."""
+    return max(0, inp.share_permille * (inp.bitrate // 1000) - inp.axes * idle_axis_bits(inp))
+
+
 def measured_load(trace, bit_ns: int, t0_ns: int, t1_ns: int, window_ns: int = 100_000_000) -> tuple[float, float]:
     """What the bus carried in [t0, t1) (the motion job's phase): the mean load and the highest load of any
     window of window_ns (a planned load is a rate; a short burst is what overloads a bus)."""

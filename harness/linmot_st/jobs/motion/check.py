@@ -22,6 +22,7 @@ record and the bus trace, with the expectations of plan.py (the PVL as written):
 
 from __future__ import annotations
 
+import math
 import struct
 from dataclasses import dataclass, field
 
@@ -29,7 +30,8 @@ from linmot_st.protocol import commands as C
 from linmot_st.protocol import words as W
 
 from .plan import (CAM_DEMAND_TOLERANCE_MM, CAPTURE_TOLERANCE_MM, CURVE_ACTUAL_TOLERANCE_MM, CURVE_DEMAND_TOLERANCE_MM, MM,
-                   POSITION_TOLERANCE_MM, VELOCITY_TOLERANCE, Plan)
+                   POSITION_TOLERANCE_MM, STREAM_DEMAND_TOLERANCE_MM, STREAM_PERIOD_MS, VELOCITY_TOLERANCE, Plan,
+                   Step)
 
 
 @dataclass
@@ -109,6 +111,12 @@ def check_motion(result, plan: Plan, drives: dict) -> MotionCheck:
                 out.steps.append(_check_curve(ax, rec, step, drive))
             elif step.kind == "cam":
                 out.steps.append(_check_cam(ax, rec, step, drive))
+            elif step.kind == "stream":
+                out.steps.append(_check_stream(ax, rec, step, drive))
+            elif step.kind == "ctwrite":
+                out.steps.append(_check_ct_write(ax, rec, step, drive))
+            elif step.kind == "ctloop":
+                out.steps.append(_check_ct_loop(ax, rec, step, drive, end))
             elif step.kind == "trigger":
                 out.steps.append(_check_trigger(ax, rec, step, traj, end))
             elif step.kind == "probe":
@@ -212,3 +220,85 @@ def _check_cam(ax, rec, step, drive) -> StepCheck:
                      f"demand within {dev:.4f} mm of the cam as written at the master count (tolerance "
                      f"{CAM_DEMAND_TOLERANCE_MM}), up to {top:.3f} mm from where it coupled, {len(samples)} samples",
                      demand_dev_mm=dev)
+
+
+def stream_position(step: Step, tau_ns: int) -> float:
+    """The PLC's sine (plc_project/motion.st, STREAM) at its time tau, in 0.1 um: (1 - cos) from the base."""
+    tau = min(max(tau_ns, 0), step.hold_ms * 1_000_000) * 1e-9
+    w = 2 * math.pi * step.frequency_hz
+    return step.position_mm * MM + step.amplitude_mm * MM * (1 - math.cos(w * tau)) / 2
+
+
+def _check_stream(ax, rec, step: Step, drive) -> StepCheck:
+    """The demand against the PLC's sine 1.5 SYNC periods late ([MC] 5.4; docs/emulator.md 13.4): the sine's time
+    zero is the first setpoint's stamp less the sine time the PLC gave that setpoint (a whole number of periods:
+    the SYNCs between the start and the first setpoint sent, taken from the setpoint's own position)."""
+    period = STREAM_PERIOD_MS * 1_000_000
+    t0, t1 = rec.t0_ns + rec.off0_ns, rec.t1_ns + rec.off1_ns
+    sent = [(t, struct.unpack_from("<i", p)[0]) for t, h, p in drive.mc.executed
+            if t0 <= t <= t1 and C.command_id(h) == 0x033]
+    if len(sent) < 2:
+        return StepCheck(ax.axis, rec.index, "stream", False, f"{len(sent)} stream setpoint(s) executed")
+    t_first, p_first = sent[0]
+    k0 = min(range(8), key=lambda k: abs(stream_position(step, k * period) - p_first))
+    zero = t_first + period * 3 // 2 - k0 * period            # when the sine's time zero plays
+    # the MC cycles' samples: the trajectory also records one at each command's reception (a SYNC between two
+    # cycles), whose demand is still the last cycle's
+    stamps = {t for t, _ in sent}
+    samples = [s for s in drive.mc.trajectory.between(t_first + period * 3 // 2, sent[-1][0] + period * 3 // 2)
+               if s.t_ns not in stamps]
+    dem = max(abs(s.demand - stream_position(step, s.t_ns - zero)) for s in samples) / MM
+    ok = dem <= STREAM_DEMAND_TOLERANCE_MM and drive.mc.error_code == 0
+    return StepCheck(ax.axis, rec.index, "stream", ok,
+                     f"{len(sent)} setpoints; the demand within {dem:.4f} mm of the PLC's sine 1.5 periods late "
+                     f"(tolerance {STREAM_DEMAND_TOLERANCE_MM} mm), {len(samples)} samples", demand_dev_mm=dem,
+                     t_exec_ns=zero - rec.off0_ns)
+
+
+def ct_loop_strokes(samples, out_pu: int, back_pu: int) -> int:
+    """How often the demand reached the outer end coming from the inner one (within 0.1 um)."""
+    n, out = 0, False
+    for smp in samples:
+        if not out and smp.demand >= out_pu - 1:
+            n, out = n + 1, True
+        elif out and smp.demand <= back_pu + 1:
+            out = False
+    return n
+
+
+def ct_loop_program(step: Step) -> dict[int, bytes]:
+    """The entries the PLC's CTWRITE step writes (plc_project/motion.st), as the catalogue encodes them."""
+    from linmot_st.emulator.linmot.command_table import build_entry     # the entry layout (seeds table 10)
+
+    base, vad = step.entry, dict(vmax=round(step.velocity * 1000), acc=round(step.acceleration * 100),
+                                 dec=round(step.acceleration * 100))
+    rows = [(C.SET_CT_VAR1, dict(value=0)), (C.VAI_GO_TO_POS, dict(target=round(step.position_mm * MM), **vad)),
+            (C.WAIT_MOTION_FINISHED, {}), (C.VAI_GO_TO_POS, dict(target=round(step.back_mm * MM), **vad)),
+            (C.WAIT_MOTION_FINISHED, {}), (C.ADD_CT_VAR1, dict(value=1)),
+            (C.IF_VAR1_LESS, dict(value=step.count, if_true=base + 1, if_false=base + 7)), (C.WAIT_MOTION_FINISHED, {})]
+    return {base + k: build_entry(cid << 4, C.encode(cid, 0, **f)[2:], name="PLC loop",
+                                  link=0xFFFF if k >= 6 else base + k + 1)
+            for k, (cid, f) in enumerate(rows)}
+
+
+def _check_ct_write(ax, rec, step: Step, drive) -> StepCheck:
+    """The PLC's program on the drive (RAM), entry by entry as the catalogue encodes it."""
+    want, have = ct_loop_program(step), drive.ct.ram
+    bad = [k for k, block in want.items() if have.get(k) != block]
+    return StepCheck(ax.axis, rec.index, "ctwrite", not bad,
+                     f"entries {min(want)}..{max(want)} on the drive as the catalogue encodes the program"
+                     if not bad else f"entries {bad} differ from the program as the catalogue encodes it")
+
+
+def _check_ct_loop(ax, rec, step: Step, drive, end) -> StepCheck:
+    """The PLC's command-table program run: the stroke as often as it counts on the trajectory, the axis back at
+    the inner end."""
+    n = step.count
+    out_pu, back_pu = round(step.position_mm * MM), round(step.back_mm * MM)
+    t0, t1 = rec.t0_ns + rec.off0_ns, rec.t1_ns + rec.off1_ns
+    strokes = ct_loop_strokes(drive.mc.trajectory.between(t0, t1), out_pu, back_pu)
+    reached = end.actual / MM
+    ok = strokes == n and abs(reached - step.back_mm) <= POSITION_TOLERANCE_MM
+    return StepCheck(ax.axis, rec.index, "ctloop", ok,
+                     f"{strokes} stroke(s) out to {step.position_mm:g} mm (the program counts {n}), at {reached:.3f} "
+                     f"mm, target {step.back_mm:g} mm (tolerance {POSITION_TOLERANCE_MM} mm)", reached_mm=reached)

@@ -72,7 +72,8 @@ def run_command(args: argparse.Namespace) -> int:
         return 1
     # per-node PVL files (--pvl NODE=FILE, e.g. a B1100 beside E1100s): the steps every axis can run
     others = [s.pvl for s in prep.datasets.sources if s.pvl is not prep.pvl] if prep.datasets else []
-    plan = make_plan(prep.pvl, args.position, others=others)
+    # the PLC-streamed profile needs a deterministic scan: the simulated bus's virtual time, not real time
+    plan = make_plan(prep.pvl, args.position, others=others, stream=prep.opts.bus == "sim")
     if plan.refusals:
         # before any motion (and before commissioning): the file's own settings exclude a step
         print(f"motion job: REFUSED before motion: {plan.stroke.describe()}")
@@ -89,7 +90,8 @@ def run_command(args: argparse.Namespace) -> int:
         result = run_job(prep.pvl, prep.opts, prep.build, plan, dataset=prep.dataset, datasets=prep.datasets,
                          progress=progress,
                          motion_progress=None if args.quiet else MotionProgress(err),
-                         timeout_s=args.timeout or 120.0, inhibit_100us=budget.interval_100us)
+                         timeout_s=args.timeout or 120.0, inhibit_100us=budget.interval_100us,
+                         share_percent=args.bus_share)
     except (ValueError, OSError) as e:
         error(args, str(e))
         return 2
@@ -110,6 +112,11 @@ def run_command(args: argparse.Namespace) -> int:
         changed = sorted({u for ps in result.after.ram_changed.values() for u in ps})
         print("RAM parameters the motion steps wrote (checked above as commissioned): "
               + ", ".join(f"{u:04X}h" for u in changed))
+    if result.after is not None and result.after.ct_changed:
+        entries = sorted({k for es in result.after.ct_changed.values() for k in es})
+        print(f"command-table entries the motion steps wrote to RAM (checked above as commissioned): "
+              f"{entries[0]}..{entries[-1]}" if entries == list(range(entries[0], entries[-1] + 1))
+              else ", ".join(map(str, entries)))
     if result.after is not None:
         check = check_motion(result.after, plan, result.drives)
         motion = MotionReport(result.after, check, result.trace, result.drives)

@@ -84,6 +84,9 @@ class MotionResult:
     # emulated drives: parameters whose RAM value the steps changed (MC_Jog and MC_MoveVelocity write the
     # predefined VA interpolator's 14B0h..14C0h): node -> {upid: (RAM before the motion, after)}
     ram_changed: dict = field(default_factory=dict)
+    # emulated drives: command-table entries the steps wrote to RAM (the CTLOOP step's program): node -> {entry:
+    # (the entry before the motion or None, after)}
+    ct_changed: dict = field(default_factory=dict)
 
     @property
     def finished(self) -> bool:
@@ -169,24 +172,35 @@ class MotionSampler(IdlePredicate):
         return 0 if now is None else now - plc_t
 
 
-def _write_steps(plc, plan: Plan, inhibit_100us: int = 0) -> None:
-    # every step carries the TxPDO2 inhibit time of the bus budget (linmot_st.jobs.motion.budget); SETUP uses it
-    values = [{**s.plc_value(), "INHIBIT100US": inhibit_100us} for s in plan.steps]
+def _write_steps(plc, plan: Plan, inhibit_100us: int = 0, budget_in=None) -> None:
+    # every step carries the TxPDO2 inhibit time of the bus budget (linmot_st.jobs.motion.budget); SETUP uses it.
+    # With budget_in, each step its Load and the program the steps' capacity (FB_PlcMotion's bus admission)
+    from .budget import admission_capacity, step_burst, step_load
+
+    def load(kind):
+        if budget_in is None:
+            return {"LOAD": 0, "BURST": 0}
+        return {"LOAD": step_load(kind, budget_in, inhibit_100us), "BURST": step_burst(kind, budget_in)}
+    values = [{**s.plc_value(), "INHIBIT100US": inhibit_100us, **load(s.kind)} for s in plan.steps]
     blank = {"KIND": "PLC_STEP_NONE", "POSITION": 0.0, "VELOCITY": 0.0, "ACCELERATION": 0.0, "CURVEID": 0,
-             "ENTRY": 0, "INHIBIT100US": 0, "HOLD": 0}
+             "ENTRY": 0, "INHIBIT100US": 0, "HOLD": 0, "AMPLITUDE": 0.0, "FREQUENCY": 0.0, "LOAD": 0,
+             "BURST": 0, "BACK": 0.0, "COUNT": 0}
     plc[f"{INSTANCE}.STEPS"] = values + [blank] * (MAX_STEPS - len(values))
     plc[f"{INSTANCE}.NSTEPS"] = len(values)
+    plc[f"{INSTANCE}.STEPBUDGET"] = admission_capacity(budget_in) if budget_in is not None else 0
 
 
-def motion_phase(plan: Plan, timeout_s: float, progress=None, inhibit_100us: int = 0, toggle_inputs: bool = True):
+def motion_phase(plan: Plan, timeout_s: float, progress=None, inhibit_100us: int = 0, toggle_inputs: bool = True,
+                 budget_in=None):
     """The `after` hook of the commissioning runner: runs the steps on every commissioned axis, with this TxPDO2
-    inhibit time (the bus budget's, linmot_st.jobs.motion.budget)."""
+    inhibit time (the bus budget's, linmot_st.jobs.motion.budget); `budget_in` (BudgetInputs): the steps start as the
+    bus has room for them (FB_PlcMotion's admission; None: each as soon as the axis is ready)."""
 
     def after(plc, sim, drives) -> MotionResult:
         from linmot_st.cosim import CoSimTimeout
 
         nodes = list(drives) or list(range(1, plc[f"{INSTANCE}.AXES"] + 1))
-        _write_steps(plc, plan, inhibit_100us)
+        _write_steps(plc, plan, inhibit_100us, budget_in)
         plc[f"{INSTANCE}.RUNMOTION"] = True
         sampler = MotionSampler(plc, nodes, plan, progress, drives, toggle_inputs)
         result = MotionResult(plan, sampler.axes, plc.time_ns)
@@ -199,6 +213,7 @@ def motion_phase(plan: Plan, timeout_s: float, progress=None, inhibit_100us: int
                 result.clock_margin_ns = 5 * plc.tick_ns
         ram0 = {n: {u: p.ram for u, p in d.params.by_upid.items()} for n, d in drives.items()
                 if hasattr(d, "params")}
+        ct0 = {n: dict(d.ct.ram) for n, d in drives.items() if hasattr(d, "ct")}
         wall0 = time.perf_counter()
         try:
             sim.run_until(sampler, max_scans=int(timeout_s * 1e9 // plc.tick_ns))
@@ -212,6 +227,11 @@ def motion_phase(plan: Plan, timeout_s: float, progress=None, inhibit_100us: int
             changed = {u: (v, params[u].ram) for u, v in before.items() if params[u].ram != v}
             if changed:
                 result.ram_changed[n] = changed
+        for n, before in ct0.items():
+            now = drives[n].ct.ram
+            changed = {k: (before.get(k), now.get(k)) for k in set(before) | set(now) if before.get(k) != now.get(k)}
+            if changed:
+                result.ct_changed[n] = changed
         bus = getattr(sim, "bus", None)
         if getattr(bus, "trace", None) is not None and hasattr(bus, "bit_ns"):
             from .budget import measured_load
@@ -232,19 +252,32 @@ def motion_phase(plan: Plan, timeout_s: float, progress=None, inhibit_100us: int
 @contextmanager
 def as_commissioned(result: RunResult):
     """While inside, the emulated drives' RAM holds what the commissioning left there: the commissioning's
-    memory check is of the commissioning, not of the parameters the motion steps wrote since (their list:
-    MotionResult.ram_changed, printed by the job)."""
+    memory check is of the commissioning, not of the parameters and command-table entries the motion steps wrote
+    since (their lists: MotionResult.ram_changed, printed by the job, and MotionResult.ct_changed)."""
     m = result.after
     changed = m.ram_changed if m is not None else {}
+    entries = m.ct_changed if m is not None else {}
+
+    def put(table: dict, k: int, block) -> None:
+        if block is None:
+            table.pop(k, None)
+        else:
+            table[k] = block
     for n, ps in changed.items():
         for u, (before, _) in ps.items():
             result.drives[n].params.by_upid[u].ram = before
+    for n, es in entries.items():
+        for k, (before, _) in es.items():
+            put(result.drives[n].ct.ram, k, before)
     try:
         yield
     finally:
         for n, ps in changed.items():
             for u, (_, after) in ps.items():
                 result.drives[n].params.by_upid[u].ram = after
+        for n, es in entries.items():
+            for k, (_, after) in es.items():
+                put(result.drives[n].ct.ram, k, after)
 
 
 def placed_drives(stroke, opts: RunOptions, datasets=None, trigger_mode: int | None = None,
@@ -279,13 +312,17 @@ def job_drives(plan: Plan, opts: RunOptions, datasets=None):
 
 def run_job(pvl, opts: RunOptions, build_result, plan: Plan, *, dataset=None, progress=None,
             motion_progress=None, timeout_s: float = 60.0, inhibit_100us: int = 0, toggle_inputs: bool = True,
-            **kw) -> RunResult:
+            share_percent: float = 70.0, **kw) -> RunResult:
     """Commission, then move: the commissioning RunResult with the MotionResult in .after (None when the
     commissioning failed). The emulated drives get the mechanics plan.stroke placed (unless the caller passes
-    its own drive_factory); a plan that cannot fit is refused (ValueError) before anything runs."""
+    its own drive_factory); a plan that cannot fit is refused (ValueError) before anything runs. The steps are
+    admitted to the bus within `share_percent` of its bit rate (linmot_st.jobs.motion.budget.admission_capacity)."""
+    from .budget import job_inputs
+
     if plan.refusals:
         raise ValueError("the motion plan does not fit the axis: " + "; ".join(plan.refusals))
     if plan.stroke is not None and kw.get("drive_factory") is None:
         kw["drive_factory"] = job_drives(plan, opts, kw.get("datasets"))
     return run(pvl, opts, build_result, dataset=dataset, progress=progress,
-               after=motion_phase(plan, timeout_s, motion_progress, inhibit_100us, toggle_inputs), **kw)
+               after=motion_phase(plan, timeout_s, motion_progress, inhibit_100us, toggle_inputs,
+                                  job_inputs(opts.axes, opts.bitrate, share_percent)), **kw)

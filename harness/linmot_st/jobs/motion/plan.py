@@ -42,12 +42,26 @@ CAPTURE_TOLERANCE_MM = 0.001    # the captured position against the trajectory a
 CAM_TURN_MS = 500              # the job turns the conveyor (master encoder) one cam length in this time
 CAM_HOLD_MS = 600               # the PLC keeps the cam coupled this long after InSync (the turn starts 20 ms in)
 CAM_DEMAND_TOLERANCE_MM = 0.001
+STREAM_AMPLITUDE_MM = 10.0      # the PLC's sine: (1 - cos) over this stroke ...
+STREAM_FREQUENCY_HZ = 2.5       # ... at this frequency ...
+STREAM_HOLD_MS = 800            # ... for two periods, one PV setpoint per 2 ms SYNC (FB_LmStream 033xh: the
+                                # configured period 14E6h, 2000 us, keeps the SYNC jitter out, [MC] 4.3.41)
+STREAM_PERIOD_MS = 2            # the SYNC period (plc_project/commission.st's FB_LmSync)
+STREAM_DEMAND_TOLERANCE_MM = 0.001   # the demand against the sine 1.5 periods late (Hermite between setpoints)
 VELOCITY_SLACK_S = 0.1          # the span's margin for the PLC's handshakes and InVelocity's SDO reads
+CT_LOOP_ENTRIES = 8             # the PLC's command-table program (plc_project/motion.st, CTWRITE) ...
+CT_LOOP_FIRST_ENTRY = 200       # ... from the first entry at or above this with 8 entries no PVL file uses
+CT_LOOP_OUT_MM = 30.0           # out to here and back ...
+CT_LOOP_BACK_MM = 10.0
+CT_LOOP_COUNT = 3               # ... this many times (IF Var1 < 3)
+CT_LOOP_VELOCITY = 250.0        # mm/s
+CT_LOOP_ACCELERATION = 5000.0   # mm/s^2 (and deceleration)
 
 STEP_KINDS = {"setup": "PLC_STEP_SETUP", "power": "PLC_STEP_POWER", "home": "PLC_STEP_HOME",
               "move": "PLC_STEP_MOVE", "curve": "PLC_STEP_CURVE", "ct": "PLC_STEP_CT", "stop": "PLC_STEP_STOP",
               "off": "PLC_STEP_OFF", "jog": "PLC_STEP_JOG", "velocity": "PLC_STEP_VELOCITY",
-              "trigger": "PLC_STEP_TRIGGER", "probe": "PLC_STEP_PROBE", "cam": "PLC_STEP_CAM"}
+              "trigger": "PLC_STEP_TRIGGER", "probe": "PLC_STEP_PROBE", "cam": "PLC_STEP_CAM",
+              "stream": "PLC_STEP_STREAM", "ctwrite": "PLC_STEP_CTWRITE", "ctloop": "PLC_STEP_CT"}
 
 
 @dataclass
@@ -109,11 +123,16 @@ class Step:
     hold_ms: int = 0                                 # jog, velocity: T_PlcStep.Hold
     reach_mm: tuple[float, float] | None = None      # jog, velocity: how far back / forward it may go from
                                                      # where the step starts (no target: a bound)
+    amplitude_mm: float = 0.0                        # stream: the PLC's sine
+    frequency_hz: float = 0.0
+    back_mm: float = 0.0                             # ctwrite, ctloop: the inner end of the program's stroke
+    count: int = 0                                   # ctwrite, ctloop: the strokes it counts
 
     def plc_value(self) -> dict:
         return {"KIND": STEP_KINDS[self.kind], "POSITION": self.position_mm, "VELOCITY": self.velocity,
                 "ACCELERATION": self.acceleration, "CURVEID": self.curve_id, "ENTRY": self.entry,
-                "HOLD": self.hold_ms * 1_000_000}
+                "HOLD": self.hold_ms * 1_000_000, "AMPLITUDE": self.amplitude_mm, "FREQUENCY": self.frequency_hz,
+                "BACK": self.back_mm, "COUNT": self.count}
 
 
 @dataclass
@@ -155,6 +174,18 @@ def _ct_chain(pvl, entry: int, scale_pos: int) -> tuple[list[int], list[int] | N
     return chain, targets or None
 
 
+def ct_loop_entry(pvl, others=()) -> int:
+    """The first of CT_LOOP_ENTRIES consecutive command-table entries, from CT_LOOP_FIRST_ENTRY on, that no PVL
+    file of the bus writes at commissioning (the PLC's program must not overwrite the file's entries)."""
+    used = {e.entry_id for f in (pvl, *others) for e in f.command_table}
+    base = CT_LOOP_FIRST_ENTRY
+    while any(k in used for k in range(base, base + CT_LOOP_ENTRIES)):
+        base += 1
+    if base + CT_LOOP_ENTRIES > 256:
+        raise ValueError(f"no {CT_LOOP_ENTRIES} free command-table entries from {CT_LOOP_FIRST_ENTRY} on")
+    return base
+
+
 def _same_curve(a, b) -> bool:
     return a.info_block == b.info_block and list(a.setpoints) == list(b.setpoints)
 
@@ -164,13 +195,15 @@ def _lacking(c, others) -> list:
     return [o for o in others if not any(oc.curve_id == c.curve_id and _same_curve(oc, c) for oc in o.curves)]
 
 
-def plan(pvl, position_mm: float = 50.0, settings=None, others=(), fb_steps: bool = True) -> Plan:
+def plan(pvl, position_mm: float = 50.0, settings=None, others=(), fb_steps: bool = True,
+         stream: bool = True) -> Plan:
     """The steps; `settings`: the emulated drives' MotionSettings whose stroke the plan is fitted into.
     `others`: the PVL files of other nodes on the bus (per-node datasets; every axis runs the same steps): a
     curve or command-table step only where each of them holds the same curve or command table (a B1100 file
     holds neither). `fb_steps` False: without the jog, velocity, trigger, probe and cam steps (the job as it was
     before them: their parameter writes and SDO reads start on every axis in the same scan, a burst the bus
-    budget does not plan, docs/motion.md)."""
+    budget does not plan, docs/motion.md). `stream` False: without the PLC-streamed profile (it needs a PLC
+    that keeps its 2 ms SYNC: not a Python PLC in real time on a python-can bus)."""
     steps = [Step("setup", "set up the PDOs (TxPDO1 event timer 50 ms)"), Step("power", "power (MC_Power)"),
              Step("home", "home (MC_Home)")]
     not_run: list[str] = []
@@ -182,9 +215,14 @@ def plan(pvl, position_mm: float = 50.0, settings=None, others=(), fb_steps: boo
         # the trigger, probe and cam rows of the catalogue are E1100 only (seed 004 4.2 has no B1100 mark for
         # them, [MC] 5.5: no cams on a B1100), and every axis runs the same steps
         fb_steps = False
-        not_run.append("jog, velocity, trigger, probe and cam steps: not on every axis (a B1100 node: "
+        not_run.append("jog, velocity, trigger, probe, stream, cam and command-table loop steps: not on every axis "
+                       "(a B1100 node: "
                        f"{', '.join(f.filename or 'PVL' for f in b1100)})")
     steps += _jog_and_velocity() if fb_steps else []
+    if fb_steps and not stream:
+        steps = [s for s in steps if s.kind != "stream"]
+        not_run.append("the PLC-streamed profile: the PLC runs in real time on this bus, its scans too late for a "
+                       f"{STREAM_PERIOD_MS} ms SYNC stream (the drive's 1.5-period margin)")
     offset = _param(pvl, P_CURVE_OFFSET, 0)
     time_scale = _param(pvl, P_CURVE_TIME_SCALE, 10000)
     amplitude = _param(pvl, P_CURVE_AMPLITUDE, 1000) / 1000.0
@@ -232,6 +270,16 @@ def plan(pvl, position_mm: float = 50.0, settings=None, others=(), fb_steps: boo
     else:
         if table:
             not_run.append("command table: no entry whose sequence is absolute VAI moves and waits only")
+    if fb_steps:
+        entry = ct_loop_entry(pvl, others)
+        # the PLC writes its program (SDO, CTWRITE), then starts it as any command-table entry (200xh, CT)
+        loop = dict(entry=entry, position_mm=CT_LOOP_OUT_MM, back_mm=CT_LOOP_BACK_MM, count=CT_LOOP_COUNT,
+                    velocity=CT_LOOP_VELOCITY, acceleration=CT_LOOP_ACCELERATION)
+        steps += [Step("ctwrite", f"the PLC writes a command-table loop to entries {entry}..{entry + CT_LOOP_ENTRIES - 1}"
+                                  f" (Var1, IF Var1 < {CT_LOOP_COUNT})", **loop),
+                  Step("ctloop", f"start the PLC's loop (entry {entry}): {CT_LOOP_COUNT} x out to "
+                                 f"{CT_LOOP_OUT_MM:g} mm and back to {CT_LOOP_BACK_MM:g} mm", target_mm=CT_LOOP_BACK_MM,
+                       span_mm=(CT_LOOP_BACK_MM, CT_LOOP_OUT_MM), **loop)]
     steps += [Step("stop", "stop (MC_Stop)", acceleration=STOP_DECELERATION), Step("off", "switch off")]
     if len(steps) > MAX_STEPS:
         dropped = steps[MAX_STEPS - 2:-2]
@@ -261,7 +309,13 @@ def _jog_and_velocity() -> list[Step]:
             # 02Axh: the target only (01Axh's 16 bytes do not fit the RxPDOs); at the velocity move's 14BEh..14C0h
             Step("trigger", f"move to {TRIGGER_POSITION_MM:g} mm on trigger X4.6 (02Axh), the job raises it",
                  position_mm=TRIGGER_POSITION_MM, target_mm=TRIGGER_POSITION_MM),
-            Step("probe", "touch probe on X4.5 (MC_TouchProbe), the job pulses it")]
+            Step("probe", "touch probe on X4.5 (MC_TouchProbe), the job pulses it"),
+            # where the trigger step left the axis, the sine's base
+            Step("stream", f"stream a {STREAM_AMPLITUDE_MM:g} mm sine at {STREAM_FREQUENCY_HZ:g} Hz computed by the "
+                           f"PLC, one PV setpoint per {STREAM_PERIOD_MS} ms SYNC (FB_LmStream, 033xh)",
+                 position_mm=TRIGGER_POSITION_MM, target_mm=TRIGGER_POSITION_MM, hold_ms=STREAM_HOLD_MS,
+                 amplitude_mm=STREAM_AMPLITUDE_MM, frequency_hz=STREAM_FREQUENCY_HZ,
+                 span_mm=(TRIGGER_POSITION_MM, TRIGGER_POSITION_MM + STREAM_AMPLITUDE_MM))]
 
 
 def _spans(steps: list[Step]) -> None:
@@ -270,7 +324,7 @@ def _spans(steps: list[Step]) -> None:
     from where the axis may be (an interval: they have no target) over how far it may go."""
     here = None                     # (lowest, highest) where the axis may be
     for s in steps:
-        if s.kind in ("move", "trigger") or (s.kind == "ct" and s.span_mm is not None):
+        if s.kind in ("move", "trigger", "stream", "ctloop") or (s.kind == "ct" and s.span_mm is not None):
             pts = [s.target_mm] + (list(here) if here is not None else []) + (list(s.span_mm) if s.span_mm else [])
             s.span_mm = (min(pts), max(pts))
         elif s.reach_mm is not None and here is not None:

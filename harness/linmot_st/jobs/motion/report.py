@@ -10,7 +10,7 @@ from pathlib import Path
 
 from linmot_st.protocol.errors import describe
 
-from .check import MotionCheck
+from .check import MotionCheck, stream_position
 from .job import MotionResult
 from .plan import MM
 
@@ -121,6 +121,20 @@ class MotionReport:
                 top.plot([(x - t0) / 1e9 for x in xs], [run.position(x - chk.t_exec_ns) / MM for x in xs], "k--",
                          linewidth=0.8, label=None if labelled else "curve as written (PVL)")
                 labelled = True
+            if chk.axis == ax.axis and chk.kind == "stream" and chk.t_exec_ns is not None:
+                step = self.m.plan.steps[chk.index - 1]
+                n = 200
+                xs = [chk.t_exec_ns + step.hold_ms * 1_000_000 * k // n for k in range(n + 1)]
+                top.plot([(x - t0) / 1e9 for x in xs], [stream_position(step, x - chk.t_exec_ns) / MM for x in xs],
+                         ":", color="k", linewidth=0.9, label="the PLC's sine, 1.5 SYNC periods late")
+            if chk.axis == ax.axis and chk.kind == "ctloop":
+                # the PLC's command-table loop: its two ends over the step, the strokes it counted
+                r = next(r for r in ax.steps if r.index == chk.index)
+                step = self.m.plan.steps[chk.index - 1]
+                xs = [(r.t0_ns - t0) / 1e9, (r.t1_ns - t0) / 1e9]
+                for k, y in enumerate((step.position_mm, step.back_mm)):
+                    top.plot(xs, [y, y], "-.", color="tab:olive", linewidth=0.8,
+                             label=None if k else f"the PLC's command-table loop: {step.count} x between these")
         for r in ax.steps:
             top.axvline((r.t0_ns - t0) / 1e9, color="0.85", linewidth=0.6)
         # the input edges the job raised (trigger X4.6, capture X4.5) and the position the PLC read on X4.5
