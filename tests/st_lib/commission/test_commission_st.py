@@ -18,14 +18,14 @@ def test_commissioning_error_ids_are_in_the_library_table():
     assert errors.describe(0x0603).startswith("16#0603 read-back differs")
     assert errors.name_of(0x0602) == "ResetNeedsFlash"
     assert {"DatasetInvalid", "ResetNeedsFlash", "VerifyMismatch"} <= set(errors.BY_NAME)
-    body = (ST / "commission.st").read_text()
-    for e in errors.ERRORS:  # the FB names its ErrorIDs (E.<Name>), never writes their numbers
+    body = "\n".join(f.read_text() for f in sorted(ST.glob("*.st")))
+    for e in errors.ERRORS:  # the FB and its phases name their ErrorIDs (E.<Name>), never write their numbers
         assert not re.search(rf"(Err|ErrorID)\s*:=\s*16#{e.value:04X}\b", body, re.I), e.name
 
 
 def test_dataset_format_constants_agree():
     text = (ST / "types.st").read_text()
-    fmt = dict(re.findall(r"^\s*(\w+)\s*:\s*\w+\s*:=\s*(16#[0-9A-Fa-f]+|\d+);", text.split("T_LmDsFormat")[1], re.M))
+    fmt = dict(re.findall(r"^\s*(\w+)\s*:\s*\w+\s*:=\s*(16#[0-9A-Fa-f]+|\d+);", text.split("T_LmDsFormat")[1].split("END_STRUCT")[0], re.M))
     value = {k: int(v.replace("16#", ""), 16) if v.startswith("16#") else int(v) for k, v in fmt.items()}
     assert value == {
         "Magic": dsf.MAGIC, "Version": dsf.VERSION, "HeaderWords": dsf.HEADER_WORDS,
@@ -45,6 +45,28 @@ def test_matiec_rules():
     for f in sorted((REPO / "plc_project").glob("*.st")):
         code = re.sub(r"\(\*.*?\*\)", "", f.read_text(), flags=re.S)
         assert not re.search(r"\bFOR\b", code)
+
+
+def test_one_file_per_phase_of_the_commissioning_fb():
+    """FB_LmCommission is the sequencer (commission.st); each phase of E_LmComPhase but IDLE and DONE is one file
+    phase_<name>.st of FUNCTIONs F_LmCom<Phase>..., and docs/commissioning.md's phase table names it."""
+    types = re.sub(r"\(\*.*?\*\)", "", (ST / "types.st").read_text(), flags=re.S)
+    enum = re.search(r"E_LmComPhase\s*:\s*\((.*?)\)", types, re.S).group(1)
+    phases = [p.strip()[len("LM_COM_"):] for p in enum.split(",")]
+    assert phases[0] == "IDLE" and phases[-1] == "DONE"
+    phases = phases[1:-1]
+    assert len(phases) == 11
+    files = {f.name for f in ST.glob("phase_*.st")}
+    assert files == {f"phase_{p.lower()}.st" for p in phases}
+    docs = (REPO / "docs" / "commissioning.md").read_text()
+    for p in phases:
+        assert f"| {p} | `phase_{p.lower()}.st` |" in docs, p
+        code = (ST / f"phase_{p.lower()}.st").read_text()
+        pous = re.findall(r"^(FUNCTION_BLOCK|FUNCTION)\s+(\w+)", code, re.M)
+        assert pous and all(kind == "FUNCTION" and name.startswith("F_LmCom") for kind, name in pous), (p, pous)
+    sequencer = (ST / "commission.st").read_text()
+    assert re.findall(r"^FUNCTION_BLOCK\s+(\w+)", sequencer, re.M) == ["FB_LmCommission"]
+    assert not re.findall(r"^FUNCTION\s", sequencer, re.M)
 
 
 def test_pvl_docs_and_help_name_every_module_and_command(capsys):
