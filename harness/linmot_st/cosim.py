@@ -27,7 +27,8 @@ attribute accesses plus the PLC step.
 from __future__ import annotations
 
 import time
-from typing import TYPE_CHECKING, Any, Callable
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
 
 from linmot_st.bus.frame import Frame
 from linmot_st.bus.pycan import OwnFrames

@@ -41,7 +41,7 @@ class RequestLoop:
         self.end_ns: int | None = None
         self._go: int | None = None
 
-    def start_at(self, t_ns: int) -> "RequestLoop":
+    def start_at(self, t_ns: int) -> RequestLoop:
         self._go = t_ns
         return self
 
@@ -164,10 +164,9 @@ def measure_cosim(scans: int = 20_000) -> list[dict]:
     from pathlib import Path
 
     from linmot_st import toolchain
+    from linmot_st.bus.nodes import ScriptedNode
     from linmot_st.cosim import CoSim
     from linmot_st.plc import Plc
-
-    from linmot_st.bus.nodes import ScriptedNode
 
     st_lib = Path(__file__).resolve().parents[2] / "st_lib"
     backend = "builtin" if toolchain.builtin_available() else "matiec" if toolchain.matiec_available() else None

@@ -111,10 +111,9 @@ def _commission(axes: int, **kw):
 
 
 def run() -> list[dict]:
+    from linmot_st.jobs.commission.testing import project_build
     from linmot_st.plc import Plc
     from linmot_st.toolchain import build
-
-    from linmot_st.jobs.commission.testing import project_build
 
     out = []
     t0 = time.perf_counter()

@@ -20,12 +20,13 @@ import struct
 import time
 
 from linmot_st.bus import Frame
-from linmot_st_bench.bus import RequestLoop, run_loop
 from linmot_st.emulator.linmot.curves import Curve
 from linmot_st.emulator.linmot.drive import E1100Drive
 from linmot_st.emulator.models import make_drive
 from linmot_st_bench import emulator_mc as motion_bench
-from linmot_st_bench import emulator_mc_cam as cam_bench, emulator_mc_stream as stream_bench
+from linmot_st_bench import emulator_mc_cam as cam_bench
+from linmot_st_bench import emulator_mc_stream as stream_bench
+from linmot_st_bench.bus import RequestLoop, run_loop
 
 S = 1_000_000_000
 RUNS = 5

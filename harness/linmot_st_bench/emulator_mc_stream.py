@@ -17,10 +17,10 @@ import struct
 import time
 
 from linmot_st.bus import Frame, SimBus
-from linmot_st.protocol import commands as C
 from linmot_st.emulator.linmot.drive import DriveTimings, E1100Drive
 from linmot_st.emulator.linmot.profile import load_profile
 from linmot_st.emulator.models import make_drive
+from linmot_st.protocol import commands as C
 
 MS = 1_000_000
 S = 1_000_000_000

@@ -58,7 +58,6 @@ def measure(axes: int, fast_idle: bool = True, report: Path | None = None, c_sha
     """One demo run; its figures (simulated s, wall s, ratio, scans, of which idle in C, frames)."""
     from linmot_st.cli import build_parser
     from linmot_st.jobs.commission.cli import commission_report, prepare_run, write_outputs
-
     from linmot_st.jobs.motion.budget import job_budget
     from linmot_st.jobs.motion.check import check_motion
     from linmot_st.jobs.motion.cli import command_line
@@ -108,12 +107,11 @@ def capacity(bitrate: int, share_percent: float = 70.0) -> dict:
     speed does not matter here)."""
     from linmot_st.jobs.commission.project import MAX_AXES, build_project, prepare
     from linmot_st.jobs.commission.runner import RunOptions
-    from linmot_st.pvl import load_pvl
-
     from linmot_st.jobs.motion.budget import job_inputs, plan_budget
     from linmot_st.jobs.motion.check import check_motion
     from linmot_st.jobs.motion.job import run_job
     from linmot_st.jobs.motion.plan import plan as make_plan
+    from linmot_st.pvl import load_pvl
 
     axes = max(n for n in range(1, MAX_AXES + 1) if plan_budget(job_inputs(n, bitrate, share_percent)).fits)
     budget = plan_budget(job_inputs(axes, bitrate, share_percent))

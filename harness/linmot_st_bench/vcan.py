@@ -29,12 +29,11 @@ def measure_here() -> list[dict]:
     import can
 
     from linmot_st.bus import Frame, NodeServer
-    from linmot_st_bench.bus import RequestLoop
+    from linmot_st.cosim import RealTimeCoSim
     from linmot_st.jobs.commission.runner import RunOptions, run
     from linmot_st.jobs.commission.testing import example, project_build
-    from linmot_st.cosim import RealTimeCoSim
     from linmot_st.plc import Plc
-
+    from linmot_st_bench.bus import RequestLoop
     from linmot_st_vcan.testing import EmulatedDrives
 
     build = project_build()

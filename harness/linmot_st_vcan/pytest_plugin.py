@@ -132,8 +132,8 @@ def pytest_runtest_protocol(item, nextitem):
 
 
 def _synthetic(item, when: str, outcome: str, message: str = ""):
-    from _pytest.runner import CallInfo
     from _pytest.reports import TestReport
+    from _pytest.runner import CallInfo
 
     def act():
         if outcome == "skipped":

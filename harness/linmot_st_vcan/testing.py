@@ -75,7 +75,7 @@ class EmulatedDrives:
     def logs(self) -> str:
         return "\n".join(f"--- linmot-st emulate, node {n} ---\n{self.log(n)}" for n in self.node_ids)
 
-    def __enter__(self) -> "EmulatedDrives":
+    def __enter__(self) -> EmulatedDrives:
         import can
 
         self.work.mkdir(parents=True, exist_ok=True)
@@ -170,7 +170,7 @@ class Candump:
         raise RuntimeError(f"candump {self.spec} did not record its sentinel {line} within {self.timeout_s} s "
                            f"(exit status {self.proc.poll()}): {self.proc.stderr.read().decode() if self.proc.poll() is not None else ''}")
 
-    def __enter__(self) -> "Candump":
+    def __enter__(self) -> Candump:
         import can
         stdbuf = shutil.which("stdbuf")
         if stdbuf is None:

@@ -3,8 +3,8 @@
 import pytest
 
 from linmot_st.bus import Frame
-from linmot_st_bench.bus import EchoSdoServer, RequestLoop, run_loop
 from linmot_st.emulator import E1100Drive
+from linmot_st_bench.bus import EchoSdoServer, RequestLoop, run_loop
 
 READ = Frame(0x601, bytes.fromhex("40 A2 33 01 00 00 00 00"))
 WRITE = Frame(0x601, bytes.fromhex("23 A2 33 01 64 00 00 00"))

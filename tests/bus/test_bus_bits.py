@@ -3,11 +3,20 @@
 import random
 
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from linmot_st.bus import Frame
-from linmot_st.bus.bits import (bus_bits, crc15, frame_bits, frame_length_bits, max_bus_bits, stuff,
-                                stuff_bit_count, unstuffed_bus_bits)
+from linmot_st.bus.bits import (
+    bus_bits,
+    crc15,
+    frame_bits,
+    frame_length_bits,
+    max_bus_bits,
+    stuff,
+    stuff_bit_count,
+    unstuffed_bus_bits,
+)
 
 
 def bits_of(data: bytes) -> list[int]:

@@ -4,13 +4,11 @@ not (docs/bus.md, "Receive filters" and "Transmit queues")."""
 
 from __future__ import annotations
 
-
 import pytest
 
 from linmot_st.bus import Frame, SimBus
 from linmot_st.bus.nodes import ScriptedNode
 from repo_paths import REPO
-
 
 
 class Recorder(ScriptedNode):

@@ -191,8 +191,8 @@ def test_without_a_watch_the_predicate_sees_every_scan(idle_build):
 def test_the_motion_job_is_the_same_with_idle_scans_in_c(idle_build):
     """The demo's scenario (commissioning with the drives' real timings: boot, flash save, reset; then the
     motion steps): the whole bus trace, every phase and every step identical."""
-    from linmot_st.jobs.commission.testing import project_build
     from linmot_st.jobs.commission.runner import RunOptions
+    from linmot_st.jobs.commission.testing import project_build
     from linmot_st.jobs.motion.budget import job_budget
     from linmot_st.jobs.motion.job import job_drives, motion_phase, run
     from linmot_st.jobs.motion.plan import plan as make_plan

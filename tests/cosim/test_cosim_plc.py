@@ -7,9 +7,9 @@ import uuid
 import pytest
 
 from linmot_st.bus import Frame, NodeServer, SimBus, open_bus
-from linmot_st_bench.bus import ECHO_ST
 from linmot_st.bus.nodes import ScriptedNode
 from linmot_st.cosim import CoSim, RealTimeCoSim
+from linmot_st_bench.bus import ECHO_ST
 from repo_paths import REPO
 
 MB = "CONFIG0.RES0.CAN0"

@@ -8,8 +8,17 @@ import struct
 import pytest
 
 from linmot_st.bus import Frame
-from linmot_st.emulator import (OPERATIONAL, PRE_OPERATIONAL, STOPPED, Curve, DriveTimings, E1100Drive,
-                                ProtocolOptions, build_entry, load_profile)
+from linmot_st.emulator import (
+    OPERATIONAL,
+    PRE_OPERATIONAL,
+    STOPPED,
+    Curve,
+    DriveTimings,
+    E1100Drive,
+    ProtocolOptions,
+    build_entry,
+    load_profile,
+)
 from linmot_st.emulator.testing import DirectLink
 
 S, MS, US = 1_000_000_000, 1_000_000, 1_000

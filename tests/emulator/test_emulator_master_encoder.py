@@ -6,7 +6,12 @@ from __future__ import annotations
 import pytest
 
 from linmot_st.emulator.linmot.master_encoder import (
-    ConstantSpeed, Function, MasterEncoder, Recorded, SpeedProfile, parse_signal,
+    ConstantSpeed,
+    Function,
+    MasterEncoder,
+    Recorded,
+    SpeedProfile,
+    parse_signal,
 )
 from linmot_st.protocol import upids as U
 

@@ -12,11 +12,11 @@ import pytest
 
 from linmot_st.bus import Frame, NodeServer, open_bus
 from linmot_st.cli import main
-from linmot_st.jobs.commission.testing import commission
-from linmot_st.jobs.commission.verify import drive_state
 from linmot_st.emulator import OPERATIONAL, DriveTimings, E1100Drive
 from linmot_st.emulator.linmot.memory import FORMAT, dump, load, read, write
 from linmot_st.emulator.testing import DirectLink
+from linmot_st.jobs.commission.testing import commission
+from linmot_st.jobs.commission.verify import drive_state
 
 
 def test_a_commissioned_drive_survives_the_round_trip_through_json(tmp_path):

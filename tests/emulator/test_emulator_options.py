@@ -9,7 +9,6 @@ import pytest
 
 from linmot_st.emulator import DriveTimings, E1100Drive, ProtocolOptions, build_entry
 from linmot_st.emulator.testing import ServedDrive
-
 from shared_vectors import seed_curve
 
 FAST = DriveTimings.fast(boot_ns=2_000_000)

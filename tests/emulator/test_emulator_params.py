@@ -4,13 +4,20 @@ firmware layers, set-to-default, UPID lists, derived drives."""
 from __future__ import annotations
 
 import pytest
-from hypothesis import given, strategies as st
+from hypothesis import given
+from hypothesis import strategies as st
 
 from linmot_st.emulator import E1100Drive, ProfileError, load_profile
+from linmot_st.emulator.linmot.params import NotWritable, NoValueAccess, OutOfRange, ParameterStore, UnknownUpid
 from linmot_st.emulator.linmot.paramtypes import TYPES, stringlets_of, text_of
-from linmot_st.emulator.linmot.params import NoValueAccess, NotWritable, OutOfRange, ParameterStore, UnknownUpid
-from linmot_st.emulator.linmot.profile import (AU_LIVE, AU_RAM_READ, AU_RAM_WRITE, AU_ROM_READ, AU_ROM_WRITE,
-                                        load_parameters)
+from linmot_st.emulator.linmot.profile import (
+    AU_LIVE,
+    AU_RAM_READ,
+    AU_RAM_WRITE,
+    AU_ROM_READ,
+    AU_ROM_WRITE,
+    load_parameters,
+)
 
 PROFILE = load_profile()
 

@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from linmot_st.bus import Frame
 from linmot_st.emulator import OPERATIONAL, PRE_OPERATIONAL, E1100Drive

@@ -17,11 +17,10 @@ import time
 
 import pytest
 
-from linmot_st.bus import Frame
-from linmot_st.emulator import (DriveTimings, E1100Drive, ErrorEntry, ErrorLog, build_entry,
-                                load_profile)
-from linmot_st.emulator.testing import DirectLink, ServedDrive
 import repo_paths
+from linmot_st.bus import Frame
+from linmot_st.emulator import DriveTimings, E1100Drive, ErrorEntry, ErrorLog, build_entry, load_profile
+from linmot_st.emulator.testing import DirectLink, ServedDrive
 from shared_vectors import seed_curve
 
 VECTORS = json.loads((repo_paths.VECTORS / "sdo_frames.json").read_text())
@@ -75,8 +74,8 @@ def coverage(exchanges) -> tuple[set[int], set[int], set[int]]:
 
 
 def emulator_codes() -> tuple[set[int], set[int], set[int]]:
-    from linmot_st.protocol import codes
     from linmot_st.emulator.linmot.manufacturer import E1100_SERVICES
+    from linmot_st.protocol import codes
 
     return {s.sub for s in E1100_SERVICES}, set(codes.RESULT_NAMES), set(codes.DRIVE_ABORTS)
 

@@ -10,9 +10,9 @@ import struct
 import pytest
 
 from linmot_st.bus.frame import Frame
-from linmot_st.emulator import E1100Drive, DriveTimings, load_profile
-from linmot_st.protocol import commands as C
+from linmot_st.emulator import DriveTimings, E1100Drive, load_profile
 from linmot_st.emulator.testing import MotionLink
+from linmot_st.protocol import commands as C
 
 MS = 1_000_000
 MM = 10_000

@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
-import pytest
-
 import json
 import shutil
+
+import pytest
 
 from linmot_st.plc import LayoutError, PathError, Plc, PlcFault
 from linmot_st.toolchain.testing import BACKEND_PARAMS, build_text

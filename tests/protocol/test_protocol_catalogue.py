@@ -8,16 +8,15 @@ import json
 
 import pytest
 
+from catalogue_programs import encoder_program
 from linmot_st.emulator import DriveTimings, E1100Drive, load_profile
 from linmot_st.emulator.linmot.motion.interpreter import HANDLERS
 from linmot_st.emulator.testing import MotionLink
 from linmot_st.protocol import commands as C
 from linmot_st.protocol import generate
 from linmot_st.protocol import words as W
-
-from stbench import available_backends
-from catalogue_programs import encoder_program
 from repo_paths import VECTORS
+from stbench import available_backends
 
 MS = 1_000_000
 MM = 10_000

@@ -3,13 +3,11 @@ ranges, stringlets from the string UPID itself, its tree-identity UPIDs, and wha
 
 from __future__ import annotations
 
-
 import pytest
 
 from linmot_st.cli import main
 from linmot_st.emulator.linmot.profile import B1100_PROFILE, load_profile
-from linmot_st.pvl import PvlError, load_pvl, parse_pvl, write_pvl
-from linmot_st.pvl import demo
+from linmot_st.pvl import PvlError, demo, load_pvl, parse_pvl, write_pvl
 from linmot_st.pvl.drive_types import B1100, E1100, drive_type, drive_type_of_tree_file
 from linmot_st.pvl.model import Parameter, ParameterObject, PvlFile
 from linmot_st.pvl.to_st import read_st

@@ -10,7 +10,6 @@ from linmot_st.cli import main
 from repo_paths import EXAMPLES
 
 
-
 def test_show_two_axes(capsys):
     assert main(["pvl", "show", str(EXAMPLES / "two_axes.pvl")]) == 0
     out = capsys.readouterr().out

@@ -7,7 +7,7 @@ import struct
 
 import pytest
 
-from linmot_st.pvl import CtEntryBlock, CurveInfo, codec, parse_pvl, write_pvl, PvlFile, Curve
+from linmot_st.pvl import CtEntryBlock, Curve, CurveInfo, PvlFile, codec, parse_pvl, write_pvl
 from linmot_st.pvl.drive_types import drive_type
 from repo_paths import VECTORS
 

@@ -8,9 +8,7 @@ from dataclasses import replace
 
 import pytest
 
-from linmot_st.pvl import (CommandTableEntry, Curve, Parameter, PvlError, PvlFile,
-                           parse_pvl, write_pvl)
-from linmot_st.pvl import codec, demo
+from linmot_st.pvl import CommandTableEntry, Curve, Parameter, PvlError, PvlFile, codec, demo, parse_pvl, write_pvl
 
 # A valid file with one object of each kind; the cases below change single lines of it.
 BASE = r"""@FileType,PVL

@@ -7,9 +7,19 @@ from __future__ import annotations
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from linmot_st.pvl import (CommandTableEntry, Curve, Parameter, ParameterObject, PvlError, PvlFile, parse_pvl,
-                           validate, write_pvl)
-from linmot_st.pvl import codec, demo
+from linmot_st.pvl import (
+    CommandTableEntry,
+    Curve,
+    Parameter,
+    ParameterObject,
+    PvlError,
+    PvlFile,
+    codec,
+    demo,
+    parse_pvl,
+    validate,
+    write_pvl,
+)
 from linmot_st.pvl.layers import LAYERS
 
 LATIN1 = st.characters(min_codepoint=0, max_codepoint=0xFF, blacklist_characters="\n\r")

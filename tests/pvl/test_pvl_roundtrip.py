@@ -3,13 +3,21 @@ the text details the reader accepts (CRLF, trailing blanks, Latin-1, commas in t
 
 from __future__ import annotations
 
-
 import pytest
 
-from linmot_st.pvl import (CommandTableEntry, Curve, Parameter, ParameterObject, PvlError, PvlFile, load_pvl,
-                           parse_pvl, save_pvl, write_pvl)
-from linmot_st.pvl import demo
-
+from linmot_st.pvl import (
+    CommandTableEntry,
+    Curve,
+    Parameter,
+    ParameterObject,
+    PvlError,
+    PvlFile,
+    demo,
+    load_pvl,
+    parse_pvl,
+    save_pvl,
+    write_pvl,
+)
 
 
 @pytest.mark.parametrize("name", sorted(demo.EXAMPLES))

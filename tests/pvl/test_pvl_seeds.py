@@ -3,13 +3,10 @@ shipped example files are what linmot_st.pvl.demo builds."""
 
 from __future__ import annotations
 
-
 import pytest
 
-from linmot_st.pvl import LAYERS, TreeIdentity, load_pvl, parse_pvl, write_pvl
-from linmot_st.pvl import codec, demo
-from repo_paths import REPO, EXAMPLES
-
+from linmot_st.pvl import LAYERS, TreeIdentity, codec, demo, load_pvl, parse_pvl, write_pvl
+from repo_paths import EXAMPLES, REPO
 
 # Figure 14 as printed in the older document (001, LinMot Talk1100): trailing blanks after most lines
 SEED_CURVE_001 = """@FileType,PVL \n@FormatVersion,1 \n \n@StartObject,Curve \n@CurveName,Example_Curve \n\

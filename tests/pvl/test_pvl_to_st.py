@@ -6,15 +6,14 @@ what the generator writes for examples/two_axes.pvl."""
 
 from __future__ import annotations
 
-
 import pytest
 from hypothesis import HealthCheck, given, settings
+from test_pvl_properties import pvl_files
 
 from linmot_st.cli import main
-from linmot_st.pvl import dataset as dsf
 from linmot_st.pvl import Curve, PvlFile, load_pvl
+from linmot_st.pvl import dataset as dsf
 from linmot_st.pvl.to_st import DEFAULT_TYPE, read_st, to_st
-from test_pvl_properties import pvl_files
 from repo_paths import REPO
 
 EXAMPLES = REPO / "examples"

@@ -11,9 +11,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from stbench import Bench
-
 from linmot_st.emulator import DriveTimings, load_profile
+from stbench import Bench
 
 MOTION_TESTBENCH = Path(__file__).resolve().parent / "motion_testbench.st"
 MM = 10_000
@@ -51,7 +50,7 @@ class MotionBench(Bench):
         r = self.fb("HOME").run()
         assert r.done, r
 
-    def ready(self) -> "MotionBench":
+    def ready(self) -> MotionBench:
         """Powered and homed."""
         self.power()
         self.home()

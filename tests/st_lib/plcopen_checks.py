@@ -4,9 +4,10 @@ frames that show a run started (an SDO request, a motion command): each suite pa
 
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 from stbench import Bench, Fb
+
 
 def outputs(fb: Fb) -> tuple:
     aborted = fb._aborted()

@@ -82,7 +82,7 @@ Result = FbResult                   # the PLCopen outcome of an FB run (linmot_s
 class Fb(FbHandle):
     """One FB instance of the testbench program: the plugin's FB handle, named within BENCH."""
 
-    def __init__(self, bench: "Bench", name: str):
+    def __init__(self, bench: Bench, name: str):
         super().__init__(bench, f"{bench.prog}.{name}")
         self.bench = bench
         self.name = name.upper()

@@ -8,9 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from stbench import VECTORS, Bench, available_backends, bench_build
-
 from linmot_st.emulator import build_entry
+from stbench import VECTORS, Bench, available_backends, bench_build
 
 SEED = json.loads((VECTORS / "curve_info.json").read_text())["curves"][0]
 

@@ -4,13 +4,11 @@ sequencer without wasted scans, and B1100 parameter access."""
 
 from __future__ import annotations
 
-
 import pytest
-
-from stbench import Bench, exchanges
 
 from linmot_st.bus import Frame
 from linmot_st.protocol.errors import BY_NAME
+from stbench import Bench, exchanges
 
 E = {name: e.value for name, e in BY_NAME.items()}
 LIVE = 0x1005

@@ -8,9 +8,8 @@ import struct
 
 import pytest
 
-from stbench import CODECS, VECTORS, bench_build
-
 from linmot_st.protocol.errors import BY_NAME
+from stbench import CODECS, VECTORS, bench_build
 
 E = {name: e.value for name, e in BY_NAME.items()}
 STRINGLETS = json.loads((VECTORS / "stringlets.json").read_text())["strings"]

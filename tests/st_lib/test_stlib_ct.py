@@ -2,13 +2,11 @@
 
 from __future__ import annotations
 
-
 import pytest
-
-from stbench import exchanges
 
 from linmot_st.emulator import build_entry
 from linmot_st.protocol.errors import BY_NAME
+from stbench import exchanges
 
 E = {name: e.value for name, e in BY_NAME.items()}
 PARS = bytes(range(0x10, 0x30))

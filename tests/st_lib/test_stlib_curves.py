@@ -8,9 +8,8 @@ import struct
 
 import pytest
 
-from stbench import VECTORS, exchanges
-
 from linmot_st.protocol.errors import BY_NAME
+from stbench import VECTORS, exchanges
 
 E = {name: e.value for name, e in BY_NAME.items()}
 CURVES = json.loads((VECTORS / "curve_info.json").read_text())["curves"]

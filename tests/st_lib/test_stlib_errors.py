@@ -4,10 +4,8 @@ checks the numbers the compiled library actually holds."""
 
 from __future__ import annotations
 
-
-from stbench import bench_build
-
 from linmot_st.protocol import errors, generate
+from stbench import bench_build
 
 
 def test_st_file_holds_every_number():

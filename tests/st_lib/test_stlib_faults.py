@@ -8,10 +8,9 @@ import json
 
 import pytest
 
-from stbench import MAILBOX, VECTORS, Bench
-
 from linmot_st.bus import Frame
 from linmot_st.protocol.errors import BY_NAME
+from stbench import MAILBOX, VECTORS, Bench
 
 E = {name: e.value for name, e in BY_NAME.items()}
 MS = 1_000_000

@@ -6,10 +6,8 @@ object whose earlier write timed out is therefore read back (docs/st-library.md 
 
 from __future__ import annotations
 
-
-from stbench import Bench, exchanges
-
 from linmot_st.protocol.errors import BY_NAME
+from stbench import Bench, exchanges
 
 E = {name: e.value for name, e in BY_NAME.items()}
 MS, US = 1_000_000, 1_000

@@ -7,9 +7,8 @@ import json
 
 import pytest
 
-from stbench import VECTORS, exchanges
-
 from linmot_st.protocol.errors import BY_NAME
+from stbench import VECTORS, exchanges
 
 E = {name: e.value for name, e in BY_NAME.items()}
 ABORT_READ_ONLY, ABORT_RANGE, ABORT_NO_OBJECT, ABORT_UNSUPPORTED = 0x06010002, 0x06090030, 0x06020000, 0x06010000

@@ -5,17 +5,24 @@ Execute fell before the end, re-trigger while Busy ignored, outputs reset on the
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import pytest
 
-from plcopen_checks import (assert_exclusive, check_done_held, check_one_scan_pulse,
-                            check_reset_on_falling_edge, check_rising_edge_after_the_pulse, check_toggled_execute,
-                            outputs, requests, run_recording)
-from stbench import VECTORS, Bench
-
 from linmot_st.emulator import build_entry
+from plcopen_checks import (
+    assert_exclusive,
+    check_done_held,
+    check_one_scan_pulse,
+    check_reset_on_falling_edge,
+    check_rising_edge_after_the_pulse,
+    check_toggled_execute,
+    outputs,
+    requests,
+    run_recording,
+)
+from stbench import VECTORS, Bench
 
 MS = 1_000_000
 SEED = json.loads((VECTORS / "curve_info.json").read_text())["curves"][0]

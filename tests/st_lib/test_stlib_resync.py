@@ -8,9 +8,8 @@ import struct
 
 import pytest
 
-from stbench import Bench
-
 from linmot_st.protocol.errors import BY_NAME
+from stbench import Bench
 
 E = {name: e.value for name, e in BY_NAME.items()}
 MS = 1_000_000

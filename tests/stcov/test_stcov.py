@@ -7,8 +7,8 @@ from __future__ import annotations
 import textwrap
 from pathlib import Path
 
-import pytest
 import lxml.html
+import pytest
 from lxml import etree
 
 from linmot_st.plc import Plc

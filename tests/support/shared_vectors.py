@@ -4,12 +4,12 @@ library's, the emulator's and the PVL tools' tests all use)."""
 from __future__ import annotations
 
 import json
-from functools import lru_cache
+from functools import cache
 
 from repo_paths import VECTORS
 
 
-@lru_cache(maxsize=None)
+@cache
 def load(name: str) -> dict:
     return json.loads((VECTORS / name).read_text())
 

@@ -10,9 +10,9 @@ from pathlib import Path
 
 import pytest
 
-from linmot_st_bench.runner import verdict
 from linmot_st.cli import main
 from linmot_st.toolchain.testing import BACKEND_PARAMS, write_st
+from linmot_st_bench.runner import verdict
 
 PROGRAM = """
 TYPE

@@ -3,7 +3,6 @@ RETURN included; gcc's optimisation level follows the size of a unit (toolchain.
 
 from __future__ import annotations
 
-
 from linmot_st.toolchain import cc
 from linmot_st.toolchain.testing import build_text
 

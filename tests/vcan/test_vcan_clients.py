@@ -11,10 +11,10 @@ import threading
 import can
 import canopen
 import pytest
-from shared_vectors import load
 
 from linmot_st.emulator.cia301.eds import SHIPPED_EDS
 from linmot_st_vcan.testing import Candump, EmulatedDrives, can_utility
+from shared_vectors import load
 
 pytestmark = pytest.mark.socketcan
 
@@ -120,10 +120,10 @@ def test_bad_traffic_from_cangen_crashes_neither_the_drive_nor_the_plc(tmp_path)
     # where and why; the drive keeps serving; nothing raises; a PASSED run holds the dataset
     import re
 
+    from linmot_st.emulator.testing import RawSdoClient
     from linmot_st.jobs.commission.runner import RunOptions
     from linmot_st.jobs.commission.testing import EXAMPLE, example
     from linmot_st.jobs.commission.verify import verify
-    from linmot_st.emulator.testing import RawSdoClient
     from linmot_st_vcan.testing import linmot_st
 
     cangen = can_utility("cangen")

@@ -15,8 +15,8 @@ faults of a stage in the order they were added (docs/bus.md, "Fault hooks"):
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 from .frame import Frame
 

@@ -27,7 +27,7 @@ class Frame:
             raise ValueError(f"rtr_dlc {self.rtr_dlc} is only for remote frames, 0..8")
 
     @classmethod
-    def checked_by_caller(cls, can_id: int, data: bytes) -> "Frame":
+    def checked_by_caller(cls, can_id: int, data: bytes) -> Frame:
         """A data frame without __post_init__'s checks, for a hot path whose identifier is 11-bit and whose
         data is at most 8 bytes by construction (the emulated drive's PDOs: COB-ID masked with 7FFh, a
         mapping longer than 8 bytes refused)."""
@@ -52,7 +52,7 @@ class Frame:
                            is_remote_frame=self.rtr, dlc=self.dlc, timestamp=timestamp)
 
     @classmethod
-    def from_message(cls, msg) -> "Frame":
+    def from_message(cls, msg) -> Frame:
         if msg.is_remote_frame:
             return cls(msg.arbitration_id, b"", True, msg.dlc)
         return cls(msg.arbitration_id, bytes(msg.data))

@@ -8,7 +8,9 @@ bus then offers the node no other frame, NodeServer makes it the python-can bus'
 
 from __future__ import annotations
 
-from typing import AbstractSet, Iterable, Protocol
+from collections.abc import Iterable
+from collections.abc import Set as AbstractSet
+from typing import Protocol
 
 from .frame import Frame
 

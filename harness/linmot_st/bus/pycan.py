@@ -14,11 +14,12 @@ server only for those frames, so a node's answers are not queued behind the rest
 from __future__ import annotations
 
 import heapq
-from collections import deque
 import logging
 import threading
 import time
-from typing import Any, Callable, Iterable
+from collections import deque
+from collections.abc import Callable, Iterable
+from typing import Any
 
 from .frame import Frame
 from .node import check_node, is_filtered
@@ -58,7 +59,7 @@ class NodeServer:
         self._filtered: object = _UNSET
 
     # -- life cycle -------------------------------------------------------------------------
-    def start(self) -> "NodeServer":
+    def start(self) -> NodeServer:
         if self._thread is not None:
             raise RuntimeError(f"{self.name}: server already started")
         self._t0 = time.monotonic_ns()
@@ -83,7 +84,7 @@ class NodeServer:
     def running(self) -> bool:
         return self._thread is not None and self._thread.is_alive()
 
-    def __enter__(self) -> "NodeServer":
+    def __enter__(self) -> NodeServer:
         return self.start() if self._thread is None else self
 
     def __exit__(self, *exc: object) -> None:

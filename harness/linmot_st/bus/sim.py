@@ -25,7 +25,8 @@ from __future__ import annotations
 
 import heapq
 from bisect import insort
-from typing import Any, Callable, Iterable, NamedTuple
+from collections.abc import Callable, Iterable
+from typing import Any, NamedTuple
 
 from .bits import ERROR_FRAME_BITS, IFS_BITS, frame_length_bits
 from .faults import STAGE, Fault, Predicate
@@ -77,7 +78,7 @@ class _Part:
 class Endpoint:
     """A participant that is not a node (the PLC): frames in by `send`, frames out by `receive`."""
 
-    def __init__(self, bus: "SimBus", name: str) -> None:
+    def __init__(self, bus: SimBus, name: str) -> None:
         self.bus, self.name = bus, name
         self.inbox: list[tuple[int, Frame]] = []   # (end time, frame) in delivery order
 

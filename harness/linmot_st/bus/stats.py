@@ -8,8 +8,8 @@ commissioning report divides its actual bus time by it.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, field
-from typing import Iterable
 
 from .bits import IFS_BITS, unstuffed_bus_bits
 

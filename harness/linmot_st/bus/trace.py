@@ -10,8 +10,8 @@ in the in-memory trace only: these formats have no field for it.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from pathlib import Path
-from typing import Iterable
 
 
 def trace_messages(trace: Iterable):

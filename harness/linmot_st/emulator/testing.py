@@ -161,7 +161,7 @@ class ServedDrive:
         self.client: RawSdoClient | None = None
         self._buses: list = []
 
-    def __enter__(self) -> "ServedDrive":
+    def __enter__(self) -> ServedDrive:
         import can
 
         drive_bus = can.Bus(interface="virtual", channel=self.channel)

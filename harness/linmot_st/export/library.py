@@ -23,7 +23,7 @@ from linmot_st.toolchain.builtin import ast as A
 from linmot_st.toolchain.builtin.checker import Checker
 from linmot_st.toolchain.builtin.errors import BuiltinCompileError
 from linmot_st.toolchain.builtin.loader import load, read_source
-from linmot_st.toolchain.builtin.parser import tokens   # the compiler's own lexer
+from linmot_st.toolchain.builtin.parser import tokens  # the compiler's own lexer
 
 END_KEYWORDS = {"FUNCTION": "END_FUNCTION", "FUNCTION_BLOCK": "END_FUNCTION_BLOCK", "PROGRAM": "END_PROGRAM"}
 

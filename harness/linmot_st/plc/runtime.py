@@ -16,7 +16,6 @@ from pathlib import Path
 from typing import Any
 
 from . import coverage
-
 from .access import PathError, Resolver
 from .faults import PlcFault, locate_with_debug_info
 from .layout import Layout, LayoutError
@@ -136,7 +135,7 @@ class Plc:
         if self._step_fn(n) != n:
             self._check_fault()
 
-    def step_idle(self, n: int, until_ns: int, rx_count: Var, tx_count: Var, watch: "IdleWatch | None" = None) -> int:
+    def step_idle(self, n: int, until_ns: int, rx_count: Var, tx_count: Var, watch: IdleWatch | None = None) -> int:
         """Idle scans in C: up to n scans with rx_count := 0 before each, ending before a scan that would start
         at or after until_ns, after the scan that made tx_count non-zero or changed a watched variable
         (`watch`), or at a fault (PlcFault). Returns the scans run. rx_count and tx_count are INT variables

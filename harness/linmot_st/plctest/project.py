@@ -50,7 +50,7 @@ class Project:
     _builds: dict = field(default_factory=dict, repr=False)
 
     @classmethod
-    def from_config(cls, config: pytest.Config) -> "Project":
+    def from_config(cls, config: pytest.Config) -> Project:
         root = ini(config, "linmot_st_root")
         base = Path(str(config.rootpath))
         backend = config.getoption("linmot_backend", None) or ini(config, "linmot_st_backend")

@@ -13,8 +13,9 @@
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Callable
+from typing import TYPE_CHECKING, Any
 
 from .condition import Condition, ConditionError, condition  # noqa: F401 - re-exported: the rig's API
 
@@ -63,7 +64,7 @@ class FbResult:
 class FbHandle:
     """One PLCopen-style FB instance of the PLC (Execute -> Done/Busy/Error/ErrorID/CommandAborted)."""
 
-    def __init__(self, rig: "Rig", path: str):
+    def __init__(self, rig: Rig, path: str):
         self.rig = rig
         self.path = path.upper()
 
@@ -439,9 +440,9 @@ class RealTimeRig(Rig):
         import uuid
 
         from linmot_st.bus import open_bus
-        from linmot_st.jobs.commission.runner import _RecordingBus      # the PLC side's frame record
         from linmot_st.cosim import RealTimeCoSim
         from linmot_st.emulator.models import make_drive
+        from linmot_st.jobs.commission.runner import _RecordingBus  # the PLC side's frame record
         from linmot_st.plc import Plc
 
         if bus == "virtual":                      # a channel of its own: parallel tests never share frames
@@ -493,7 +494,7 @@ class RealTimeRig(Rig):
             b.shutdown()
         self._buses = []
 
-    def __enter__(self) -> "RealTimeRig":
+    def __enter__(self) -> RealTimeRig:
         return self
 
     def __exit__(self, *exc) -> None:

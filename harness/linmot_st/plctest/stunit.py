@@ -31,7 +31,8 @@ from linmot_st.toolchain.sources import collect
 from . import scope_plugin
 from .project import project_of
 from .rig import Rig, format_frames
-from .stunit_lib import ST_PATH as STUNIT_LIB, describe_failure
+from .stunit_lib import ST_PATH as STUNIT_LIB
+from .stunit_lib import describe_failure
 
 COMMENT = re.compile(r"\(\*.*?\*\)", re.S)
 TEST_POU = re.compile(r"\b(FUNCTION_BLOCK|PROGRAM)\s+(Test\w*)", re.I)

@@ -11,9 +11,9 @@ in docs/st-library.md, the drive errors in docs/motion.md.
 from __future__ import annotations
 
 import re
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, Mapping
 
 from .commands import COMMANDS, CommandDef
 from .errors import DRIVE_ERRORS, ERRORS

@@ -6,8 +6,7 @@
 from .codec import CtEntryBlock, CurveInfo, decode_stringlets, encode_stringlets, stringlet_text
 from .errors import Diagnostic, PvlError
 from .layers import LAYERS, Layer, TreeIdentity
-from .model import (CommandTableEntry, Curve, Parameter, ParameterObject, PvlFile, Source,
-                    StringParameter)
+from .model import CommandTableEntry, Curve, Parameter, ParameterObject, PvlFile, Source, StringParameter
 from .parser import load_pvl, parse_pvl
 from .validate import validate
 from .writer import save_pvl, write_pvl

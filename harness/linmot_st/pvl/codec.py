@@ -153,7 +153,7 @@ class CurveInfo:
                           self.x_dim_uuid, self.y_dim_uuid, self.wizard_type, *self.wizard_params)
 
     @classmethod
-    def from_bytes(cls, block: bytes) -> "CurveInfo":
+    def from_bytes(cls, block: bytes) -> CurveInfo:
         if len(block) != INFO_BLOCK_SIZE:
             raise ValueError(f"a curve info block has {INFO_BLOCK_SIZE} bytes, got {len(block)}")
         (offset, otype, n, tsize, name, cid, xlen, xuuid, yuuid, wtype, *wpar) = _INFO.unpack(block)
@@ -229,7 +229,7 @@ class CtEntryBlock:
                         encode_name(self.name, CT_NAME_SIZE), self.reserved)
 
     @classmethod
-    def from_bytes(cls, block: bytes) -> "CtEntryBlock":
+    def from_bytes(cls, block: bytes) -> CtEntryBlock:
         if len(block) != CT_BLOCK_SIZE:
             raise ValueError(f"a command-table entry has {CT_BLOCK_SIZE} bytes, got {len(block)}")
         version, linked, header, params, name, reserved = _CT.unpack(block)

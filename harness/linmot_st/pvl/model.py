@@ -12,8 +12,8 @@ Every object may carry a `source` (where it was read; left out of comparisons) s
 from __future__ import annotations
 
 import re
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
-from typing import Iterator, Mapping, Union
 
 from . import codec
 from .codec import CtEntryBlock, CurveInfo
@@ -148,7 +148,7 @@ class Curve:
     @classmethod
     def make(cls, curve_id: int, name: str, setpoints, x_length: int, *,
              object_type: int = codec.OBJECT_TYPE_POSITION_TIME, wizard_type: int = 0,
-             wizard_params: tuple[int, ...] = (0,) * 7) -> "Curve":
+             wizard_params: tuple[int, ...] = (0,) * 7) -> Curve:
         """A curve with a consistent info block (the unit IDs follow the object type)."""
         points = tuple(int(v) for v in setpoints)
         x_uuid, y_uuid = codec.SUPPORTED_OBJECT_TYPES.get(object_type, (codec.UUID_TIME, codec.UUID_POSITION))
@@ -192,7 +192,7 @@ class CommandTableEntry:
 
     @classmethod
     def make(cls, entry_id: int, name: str, motion_header: int, parameters: bytes = b"",
-             linked_entry: int = codec.CT_NOT_LINKED) -> "CommandTableEntry":
+             linked_entry: int = codec.CT_NOT_LINKED) -> CommandTableEntry:
         block = CtEntryBlock(name=name, motion_header=motion_header, parameters=parameters,
                              linked_entry=linked_entry)
         return cls(entry_id, block.to_bytes())
@@ -210,7 +210,7 @@ class CommandTableEntry:
         return codec.bytes_to_words(self.data)
 
 
-PvlObject = Union[ParameterObject, Curve, CommandTableEntry]
+PvlObject = ParameterObject | Curve | CommandTableEntry
 
 
 @dataclass(frozen=True)

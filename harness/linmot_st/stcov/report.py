@@ -32,7 +32,7 @@ class FileCoverage:
     def branches(self) -> list[tuple[arms_mod.Decision, list[int | None]]]:
         return [(d, d.counts(self.lines)) for d in (self.st.decisions if self.st else [])]
 
-    def totals(self, pou: str | None = None) -> "Totals":
+    def totals(self, pou: str | None = None) -> Totals:
         t = Totals()
         for line, count in self.lines.items():
             if pou is None or (self.st and self.st.pou_at(line) == pou):
@@ -53,7 +53,7 @@ class Totals:
     branches: int = 0
     branches_hit: int = 0
 
-    def add(self, other: "Totals") -> None:
+    def add(self, other: Totals) -> None:
         self.lines += other.lines
         self.lines_hit += other.lines_hit
         self.branches += other.branches

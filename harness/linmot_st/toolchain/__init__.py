@@ -18,7 +18,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from . import cache as _cache
-from . import cc, sources as _sources
+from . import cc
+from . import sources as _sources
 from .backend import Backend, Generated, Rejected
 from .backends import BACKENDS, CHOICES, builtin_available, choose, matiec_available
 

@@ -63,7 +63,7 @@ class Compiler:
     version: str
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def find_compiler() -> Compiler:
     name = os.environ.get("CC", "gcc")
     argv = shlex.split(name)
@@ -74,7 +74,7 @@ def find_compiler() -> Compiler:
     return Compiler(" ".join([path, *argv[1:]]), out.stdout.splitlines()[0] if out.stdout else "unknown")
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def supports(flags: tuple[str, ...]) -> bool:
     """Whether the compiler accepts these flags (probed once on an empty unit)."""
     cc = find_compiler()
@@ -100,7 +100,7 @@ def check_flags() -> list[str]:
     return list(_check_flags())
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _check_flags() -> tuple[str, ...]:
     for flags in ((f"-fsanitize=bounds-strict,{CHECKS}", "-fno-sanitize-recover=all"),
                   (f"-fsanitize=bounds,{CHECKS}", "-fno-sanitize-recover=all"),

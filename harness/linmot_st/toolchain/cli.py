@@ -105,7 +105,8 @@ def cmd_build(args) -> int:
 def _report_for_semantics(args) -> None:
     """Which FOR semantics this iec2c has, and the program's FOR loops that it changes (spec/matiec.md
     7.1): users' iec2c differ there."""
-    from . import cache as _cache, sources as _sources
+    from . import cache as _cache
+    from . import sources as _sources
     from .matiec import for_loops, for_semantics
     src = _sources.collect(args.path, root=args.root)
     try:

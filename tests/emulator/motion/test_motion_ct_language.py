@@ -9,6 +9,7 @@ import struct
 
 import pytest
 
+from catalogue_programs import encoder_program  # (the encoder program around codec_gen)
 from linmot_st.emulator import DriveTimings, E1100Drive, build_entry, load_profile
 from linmot_st.emulator.linmot.motion import MotionSettings, ct_language
 from linmot_st.emulator.testing import MotionLink
@@ -16,9 +17,7 @@ from linmot_st.protocol import commands as C
 from linmot_st.protocol import words as W
 from linmot_st.protocol.commands import ct_language as CTL
 from linmot_st.protocol.upids import P_PREDEF_VMAX, V_ACTUAL_POSITION, V_CT_VAR1, V_CT_VAR2
-
 from stbench import available_backends
-from catalogue_programs import encoder_program  # (the encoder program around codec_gen)
 
 MS = 1_000_000
 MM = 10_000

@@ -7,12 +7,11 @@ from the setpoints (linear between them), not taken from the emulator.
 
 from __future__ import annotations
 
-
 import pytest
 
-from linmot_st.emulator import Curve, E1100Drive, DriveTimings, load_profile
-from linmot_st.protocol import commands as C
+from linmot_st.emulator import Curve, DriveTimings, E1100Drive, load_profile
 from linmot_st.emulator.testing import MotionLink
+from linmot_st.protocol import commands as C
 from linmot_st.pvl import load_pvl
 from repo_paths import EXAMPLES
 

@@ -173,6 +173,7 @@ def test_the_b1100_has_no_cam_motions():
     """The drive's series (its model's name) decides; main has no B1100 model yet, so an E1100 renamed stands
     in for it (with the B1100 model merged: make_drive("B1100", 1))."""
     import dataclasses
+
     from linmot_st.emulator.linmot.model import E1100
     from linmot_st.emulator.models import MODELS, make_drive
     from linmot_st.protocol import words as W

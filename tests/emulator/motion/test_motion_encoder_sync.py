@@ -7,8 +7,8 @@ from __future__ import annotations
 import pytest
 
 from linmot_st.emulator import Curve, DriveTimings, E1100Drive, load_profile
-from linmot_st.emulator.linmot.motion import MotionSettings
 from linmot_st.emulator.linmot.master_encoder import ConstantSpeed, Recorded
+from linmot_st.emulator.linmot.motion import MotionSettings
 from linmot_st.emulator.testing import MotionLink
 from linmot_st.protocol import commands as C
 from linmot_st.protocol import upids as U

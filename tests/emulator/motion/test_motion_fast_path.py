@@ -14,11 +14,11 @@ import pytest
 from linmot_st.bus import Frame
 from linmot_st.emulator import Curve, DriveTimings, E1100Drive, build_entry, load_profile
 from linmot_st.emulator.linmot.motion import MotionSettings
-from linmot_st_bench import emulator_mc as bench
-from linmot_st.protocol import commands as C
 from linmot_st.emulator.linmot.motion.setpoints import CurvePlan, Hold, StopPlan, VaPlan
 from linmot_st.emulator.testing import MotionLink
+from linmot_st.protocol import commands as C
 from linmot_st.pvl import load_pvl
+from linmot_st_bench import emulator_mc as bench
 from repo_paths import EXAMPLES
 
 MS = 1_000_000

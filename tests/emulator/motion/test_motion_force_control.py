@@ -8,11 +8,10 @@ from __future__ import annotations
 import statistics
 
 import pytest
+from test_motion_encoder_sync import MM, MS, direct, make_link
 
 from linmot_st.protocol import commands as C
 from linmot_st.protocol import upids as U
-
-from test_motion_encoder_sync import MM, MS, direct, make_link
 
 STIFFNESS = 10.0                                    # N/mm
 NOISE = 0.5                                         # N (standard deviation)

@@ -428,11 +428,10 @@ def test_the_st_encoder_encodes_every_row_as_the_catalogue(tmp_path):
     """F_LmMotionEncode (st_lib/motion/codec_gen.st, generated from the catalogue) against the Python codec for
     every row of this part, with values at the ends of each field's type."""
 
-    from stbench import available_backends
     from catalogue_programs import encoder_program
-
     from linmot_st import toolchain
     from linmot_st.plc import Plc
+    from stbench import available_backends
 
     backends = available_backends()
     if not backends:

@@ -12,10 +12,10 @@ import uuid
 import can
 import canopen
 import pytest
+from test_motion_realtime import _map, _od_with_pdo_description, _wait
 
 from linmot_st.emulator import DriveIO, DriveTimings, E1100Drive, load_profile
 from linmot_st.emulator.linmot.io_script import ScriptError, apply_line, apply_script
-from test_motion_realtime import _map, _od_with_pdo_description, _wait
 
 MS = 1_000_000
 

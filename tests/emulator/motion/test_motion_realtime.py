@@ -22,7 +22,7 @@ def _od_with_pdo_description() -> canopen.ObjectDictionary:
     parameters, so its EDS lists no PDO communication or mapping objects (docs/emulator.md section 9) and no
     objects for the motion command interface. canopen's PDO classes need them in the OD to create their maps;
     nothing here is read from or written to the drive."""
-    from canopen.objectdictionary import INTEGER16, ODRecord, ODVariable, UNSIGNED8, UNSIGNED16, UNSIGNED32
+    from canopen.objectdictionary import INTEGER16, UNSIGNED8, UNSIGNED16, UNSIGNED32, ODRecord, ODVariable
 
     od = canopen.import_od(str(SHIPPED_EDS), node_id=1)
     # 16-bit views of the words the PDOs carry (the EDS describes each UPID's value as 32 bits: SDO access)

@@ -11,7 +11,7 @@ import struct
 
 import pytest
 
-from linmot_st.emulator import E1100Drive, DriveTimings, load_profile
+from linmot_st.emulator import DriveTimings, E1100Drive, load_profile
 from linmot_st.emulator.testing import MotionLink
 
 MS = 1_000_000

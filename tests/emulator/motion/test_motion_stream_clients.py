@@ -12,9 +12,9 @@ import uuid
 import can
 import canopen
 import pytest
+from test_motion_realtime import _map, _od_with_pdo_description, _wait
 
 from linmot_st.emulator import DriveTimings, E1100Drive, load_profile
-from test_motion_realtime import _map, _od_with_pdo_description, _wait
 
 PERIOD_S = 0.008
 STROKE = 50_000             # 5 mm
@@ -137,9 +137,8 @@ def test_canopen_sends_a_pv_stream_on_vcan0(tmp_path):
     """The same stream to `linmot-st emulate` on vcan0 (a drive with a motor: its profile sets 1194h)."""
     import json
 
-    from linmot_st_vcan.testing import EmulatedDrives
-
     from linmot_st.emulator.linmot.profile import DEFAULT_PROFILE
+    from linmot_st_vcan.testing import EmulatedDrives
 
     # the shipped profile with its parameter table's defaults for 1194h (a motor) and 14E6h (10 ms) changed
     data = DEFAULT_PROFILE.parent

@@ -14,12 +14,12 @@ import math
 
 import pytest
 
+from catalogue_programs import NEW_ROWS
 from linmot_st.bus.frame import Frame
 from linmot_st.emulator import DriveTimings, E1100Drive, build_entry, load_profile
 from linmot_st.emulator.testing import MotionLink
 from linmot_st.protocol import commands as C
 from linmot_st.protocol import words as W
-from catalogue_programs import NEW_ROWS
 from repo_paths import VECTORS
 
 MS = 1_000_000

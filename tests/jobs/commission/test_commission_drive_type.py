@@ -4,12 +4,11 @@ makes each node's drive)."""
 
 from __future__ import annotations
 
-
 import pytest
 
+from linmot_st.emulator import E1100Drive
 from linmot_st.jobs.commission.datasets import DriveTypeMismatch, Source, check_drive_type, drive_series
 from linmot_st.jobs.commission.testing import commission, example
-from linmot_st.emulator import E1100Drive
 from linmot_st.pvl import load_pvl
 from linmot_st.pvl.dataset import from_pvl
 from repo_paths import EXAMPLES

@@ -5,19 +5,16 @@ One build per backend serves every test (linmot_st.jobs.commission.testing)."""
 
 from __future__ import annotations
 
-import re
-
 import json
 import os
+import re
 
 import pytest
 
 from linmot_st.bus.bits import bus_bits, unstuffed_bus_bits
 from linmot_st.cli import main
-from linmot_st.pvl.dataset import INFO_WORDS, PREFLIGHT_EXCHANGES
 from linmot_st.jobs.commission.testing import EXAMPLE, commission, example
-
-
+from linmot_st.pvl.dataset import INFO_WORDS, PREFLIGHT_EXCHANGES
 from linmot_st.toolchain.testing import BACKEND_PARAMS
 
 PVL = example()
@@ -229,6 +226,7 @@ def test_the_demo_command(tmp_path, capsys):
 
 def test_progress_on_a_terminal_and_in_a_log():
     import io
+
     from linmot_st.jobs.commission.progress import Progress
 
     tty, log = io.StringIO(), io.StringIO()

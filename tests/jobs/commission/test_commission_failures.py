@@ -11,10 +11,9 @@ import dataclasses
 import pytest
 
 from linmot_st.cli import main
-from linmot_st.pvl import dataset as dsf
-from linmot_st.jobs.commission.testing import EXAMPLE, commission, example
 from linmot_st.emulator import DriveTimings, E1100Drive, load_profile
-
+from linmot_st.jobs.commission.testing import EXAMPLE, commission, example
+from linmot_st.pvl import dataset as dsf
 
 PVL = example()
 WORDS = dsf.encode(PVL)

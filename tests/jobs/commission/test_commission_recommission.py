@@ -7,9 +7,9 @@ from __future__ import annotations
 import json
 
 from linmot_st.cli import main
-from linmot_st.jobs.commission.testing import EXAMPLE, commission, example
 from linmot_st.emulator import DriveTimings, E1100Drive
 from linmot_st.emulator.linmot.curves import Curve
+from linmot_st.jobs.commission.testing import EXAMPLE, commission, example
 from linmot_st.protocol.errors import BY_NAME
 from linmot_st.pvl.dataset import INFO_WORDS, from_pvl
 
@@ -169,10 +169,10 @@ class Station:
 
     def __init__(self, drive) -> None:
         from linmot_st.bus import SimBus
+        from linmot_st.cosim import CoSim
         from linmot_st.jobs.commission.project import INSTANCE, MAILBOX
         from linmot_st.jobs.commission.runner import RunOptions, _configure
         from linmot_st.jobs.commission.testing import project_build
-        from linmot_st.cosim import CoSim
         from linmot_st.plc import Plc
 
         self.plc, self.drive, self.main = Plc(project_build()), drive, INSTANCE

@@ -10,9 +10,9 @@ import dataclasses
 import pytest
 
 from linmot_st.bus import Frame
+from linmot_st.emulator import DriveTimings, E1100Drive, load_profile
 from linmot_st.jobs.commission import testing
 from linmot_st.jobs.commission.testing import example
-from linmot_st.emulator import DriveTimings, E1100Drive, load_profile
 
 MS = 1_000_000
 S = 1_000_000_000

@@ -8,8 +8,8 @@ import json
 
 import pytest
 
-from linmot_st.cli import main
 from linmot_st import resources
+from linmot_st.cli import main
 from linmot_st.jobs.commission.project import TASK_INTERVAL_NS, configuration_text, parse_task_interval, prepare
 from linmot_st.jobs.commission.testing import EXAMPLE, commission, example
 

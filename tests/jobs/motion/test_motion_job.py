@@ -10,10 +10,10 @@ import pytest
 from linmot_st.cli import main
 from linmot_st.jobs.commission.project import build_project, prepare
 from linmot_st.jobs.commission.runner import RunOptions
-from linmot_st.protocol import commands as C
 from linmot_st.jobs.motion.check import check_motion
 from linmot_st.jobs.motion.job import run_job
 from linmot_st.jobs.motion.plan import CURVE_DEMAND_TOLERANCE_MM, STREAM_DEMAND_TOLERANCE_MM, plan
+from linmot_st.protocol import commands as C
 from linmot_st.pvl import load_pvl
 from repo_paths import EXAMPLES
 

@@ -8,18 +8,17 @@ the emulated slider homed on its negative stop at 0 mm."""
 
 from __future__ import annotations
 
-
 import pytest
 
+import repo_paths
 from linmot_st.cli import main
+from linmot_st.emulator.linmot.motion import MotionSettings
 from linmot_st.jobs.commission.project import build_project, prepare
 from linmot_st.jobs.commission.runner import RunOptions
-from linmot_st.emulator.linmot.motion import MotionSettings
 from linmot_st.jobs.motion.check import check_motion
 from linmot_st.jobs.motion.job import run_job
 from linmot_st.jobs.motion.plan import plan
 from linmot_st.pvl import load_pvl, parse_pvl
-import repo_paths
 from repo_paths import EXAMPLES
 
 DATA = repo_paths.DATA / "curve_below_home.pvl"

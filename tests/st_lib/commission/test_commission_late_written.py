@@ -5,7 +5,6 @@ run's late "written", delivered out of order, for its own answer (docs/st-librar
 
 from __future__ import annotations
 
-
 from test_commission_plcopen import INSTANCE, ComBench
 
 from linmot_st.protocol.errors import BY_NAME

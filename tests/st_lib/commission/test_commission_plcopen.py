@@ -4,15 +4,18 @@ program's Start (WaitBoot off), Abort its Abort, the options its LiveRam / Flash
 
 from __future__ import annotations
 
-
 import pytest
 
 from linmot_st.jobs.commission.project import INSTANCE, MAILBOX
 from linmot_st.jobs.commission.testing import project_build
-
-from plcopen_checks import (assert_exclusive, check_rising_edge_after_the_pulse, check_toggled_execute,
-                            outputs, requests, run_recording)
-
+from plcopen_checks import (
+    assert_exclusive,
+    check_rising_edge_after_the_pulse,
+    check_toggled_execute,
+    outputs,
+    requests,
+    run_recording,
+)
 
 MS = 1_000_000
 INPUTS = {"EXECUTE": "START", "ABORT": "ABORT", "LIVERAM": "LIVERAM", "FLASH": "FLASH", "RESET": "RESET",
@@ -27,7 +30,7 @@ class ComFb:
 
     name = "COM"
 
-    def __init__(self, bench: "ComBench") -> None:
+    def __init__(self, bench: ComBench) -> None:
         self.bench = bench
 
     def _path(self, member: str) -> str:

@@ -6,15 +6,13 @@ from __future__ import annotations
 
 import json
 
-
 import pytest
 
-from stbench import bench_build
-
-from linmot_st.protocol.errors import BY_NAME
-from linmot_st.jobs.motion.budget import EVENT, SYNC, BudgetInputs, load_at, plan_budget, vectors
 import repo_paths
+from linmot_st.jobs.motion.budget import EVENT, SYNC, BudgetInputs, load_at, plan_budget, vectors
+from linmot_st.protocol.errors import BY_NAME
 from repo_paths import EXAMPLES, ST_BENCHES
+from stbench import bench_build
 
 VECTORS = json.loads((repo_paths.VECTORS / "pdo_budget.json").read_text())
 BENCH = ST_BENCHES / "budget_testbench.st"

@@ -10,12 +10,11 @@ import struct
 
 import pytest
 
-from motionbench import MM, MotionBench
-
 from linmot_st.emulator import Curve
 from linmot_st.emulator.linmot.master_encoder import SpeedProfile
 from linmot_st.protocol import upids as U
 from linmot_st.protocol.errors import BY_NAME
+from motionbench import MM, MotionBench
 
 E = {name: e.value for name, e in BY_NAME.items()}
 MS = 1_000_000

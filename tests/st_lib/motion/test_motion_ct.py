@@ -5,11 +5,10 @@ from __future__ import annotations
 
 import struct
 
-from stbench import Bench
-
 from linmot_st.bus.frame import Frame
 from linmot_st.emulator import DriveTimings, build_entry, load_profile
 from linmot_st.protocol import commands as C
+from stbench import Bench
 
 MS = 1_000_000
 MM = 10_000

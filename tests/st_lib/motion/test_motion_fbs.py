@@ -14,15 +14,14 @@ import struct
 
 import pytest
 
-from motionbench import MM, MotionBench
-from stbench import VECTORS
-
 from linmot_st.bus import Frame
 from linmot_st.emulator import Curve, build_entry
 from linmot_st.protocol import commands as C
 from linmot_st.protocol.errors import BY_NAME
 from linmot_st.pvl import load_pvl
+from motionbench import MM, MotionBench
 from repo_paths import EXAMPLES
+from stbench import VECTORS
 
 E = {name: e.value for name, e in BY_NAME.items()}
 MS = 1_000_000

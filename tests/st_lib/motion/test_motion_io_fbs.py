@@ -9,9 +9,8 @@ import struct
 
 import pytest
 
-from motionbench import MM, MotionBench
-
 from linmot_st.protocol.errors import BY_NAME
+from motionbench import MM, MotionBench
 
 E = {name: e.value for name, e in BY_NAME.items()}
 MS = 1_000_000

@@ -4,10 +4,8 @@ by FB_LmStartCommandTable (200xh): the trajectory shows N strokes ([MC] 4.3.124.
 
 from __future__ import annotations
 
-
-from motionbench import MM, MotionBench
-
 from linmot_st.protocol import commands as C
+from motionbench import MM, MotionBench
 
 END = 0xFFFF
 VAD = dict(vmax=250_000, acc=500_000, dec=500_000)        # 0.25 m/s, 5 m/s^2

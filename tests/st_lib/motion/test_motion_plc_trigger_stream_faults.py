@@ -9,11 +9,10 @@ from __future__ import annotations
 
 import math
 
-from motionbench import MM, MotionBench
-
 from linmot_st.bus.faults import match_id
 from linmot_st.protocol import words as W
 from linmot_st.protocol.errors import BY_NAME
+from motionbench import MM, MotionBench
 
 E = {name: e.value for name, e in BY_NAME.items()}
 MS = 1_000_000

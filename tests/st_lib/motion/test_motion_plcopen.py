@@ -12,19 +12,26 @@ MC_Reset, which needs an error to acknowledge before each run."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import pytest
-
-from motionbench import MotionBench
-from plcopen_checks import (IDLE, assert_exclusive, check_done_held, check_one_scan_pulse,
-                            check_reset_on_falling_edge, check_rising_edge_after_the_pulse, check_toggled_execute,
-                            outputs, run_recording)
 
 from linmot_st.emulator import Curve, build_entry
 from linmot_st.protocol import commands as C
 from linmot_st.protocol import upids as U
+from motionbench import MotionBench
+from plcopen_checks import (
+    IDLE,
+    assert_exclusive,
+    check_done_held,
+    check_one_scan_pulse,
+    check_reset_on_falling_edge,
+    check_rising_edge_after_the_pulse,
+    check_toggled_execute,
+    outputs,
+    run_recording,
+)
 
 MS = 1_000_000
 MOVE = dict(VELOCITY=1000.0, ACCELERATION=10000.0, DECELERATION=10000.0)

@@ -8,9 +8,8 @@ import math
 
 import pytest
 
-from motionbench import MotionBench
-
 from linmot_st.protocol import words as W
+from motionbench import MotionBench
 
 MS = 1_000_000
 MM = 10_000

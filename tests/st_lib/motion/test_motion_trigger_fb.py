@@ -11,16 +11,14 @@ import struct
 
 import pytest
 
-from motionbench import MM, MotionBench
-
 from linmot_st.emulator import Curve, build_entry
 from linmot_st.protocol import commands as C
 from linmot_st.protocol.commands import Target
 from linmot_st.protocol.commands.command_table import START_COMMAND_TABLE
-from linmot_st.protocol.commands.curves import (TIME_CURVE_OFFSET_TIME_AMP, TIME_CURVE_TO_POS,
-                                                TIME_CURVE_TO_POS_TIME)
+from linmot_st.protocol.commands.curves import TIME_CURVE_OFFSET_TIME_AMP, TIME_CURVE_TO_POS, TIME_CURVE_TO_POS_TIME
 from linmot_st.protocol.commands.triggered import TRIGGERED, Units
 from linmot_st.protocol.errors import BY_NAME
+from motionbench import MM, MotionBench
 
 E = {name: e.value for name, e in BY_NAME.items()}
 MOVE = dict(VELOCITY=1000.0, ACCELERATION=10000.0, DECELERATION=10000.0)     # 16-bit exact: 09Axh

@@ -8,12 +8,10 @@ import json
 
 import pytest
 
+from catalogue_programs import NEW_ROWS, encoder_program
 from linmot_st.protocol import commands as C
-
-from stbench import available_backends
-from catalogue_programs import NEW_ROWS
-from catalogue_programs import encoder_program
 from repo_paths import VECTORS
+from stbench import available_backends
 
 # the extremes of each IEC type that the encoder's DINT inputs can carry
 EXTREMES = {"INT": (-32768, 32767), "UINT": (0, 65535), "DINT": (-2**31, 2**31 - 1), "UDINT": (0, 2**31 - 1)}

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from linmot_st.toolchain.builtin import BuiltinCompileError, check_text, compile_to_c
-from repo_paths import REPO, CONFORMANCE_CASES
+from repo_paths import CONFORMANCE_CASES, REPO
 
 DIAG = re.compile(r"^(?P<file>[^:]+):(?P<line>\d+):(?P<col>\d+): error: (?P<msg>.+)$")
 
@@ -269,8 +269,8 @@ def test_code_generation_pragmas_are_matiecs_spelling_in_any_case():
 
 def test_the_library_passes_the_checker():
     root = REPO
-    from linmot_st.toolchain.builtin.loader import load
     from linmot_st.toolchain.builtin.checker import Checker
+    from linmot_st.toolchain.builtin.loader import load
     elements, files, names = load(root / "st_lib" / "linmot.st", root)
     prog_ = Checker().check(elements, names)
     assert len(files) > 10 and any(p.kind == "FUNCTION_BLOCK" for p in prog_.pous)
@@ -280,6 +280,7 @@ def test_mutated_sources_never_crash_the_compiler():
     """Random token deletions, duplications and swaps in the conformance cases: the compiler either
     generates C or reports diagnostics; it never fails with another exception."""
     import random
+
     from linmot_st.toolchain.builtin.checker import Checker
     from linmot_st.toolchain.builtin.codegen import CodeGen
     from linmot_st.toolchain.builtin.parser import parse

@@ -8,6 +8,7 @@ from __future__ import annotations
 import subprocess
 
 import pytest
+from test_builtin_names import PLACES, source
 
 from linmot_st.plc import Plc
 from linmot_st.toolchain import CompileError
@@ -15,7 +16,6 @@ from linmot_st.toolchain.builtin import BuiltinCompileError, check_text
 from linmot_st.toolchain.builtin import stdfuncs as SF
 from linmot_st.toolchain.builtin.checker import MATIEC_IDENTIFIERS
 from linmot_st.toolchain.testing import BACKEND_PARAMS, build_text, requires_matiec
-from test_builtin_names import PLACES, source
 
 # refused as a FUNCTION name although standard: operators to iec2c, or its C does not compile
 NOT_NAMEABLE = sorted(set(SF.FAMILIES) - SF.USER_NAMEABLE)

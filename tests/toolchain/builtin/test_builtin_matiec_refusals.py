@@ -241,6 +241,7 @@ def test_matiec_agrees_on_the_places_of_block_names(place, tmp_path):
 def test_matiecs_own_blocks_are_those_beyond_the_standard():
     """stdfb.NON_STANDARD is what MatIEC's lib/*.txt declares beyond the IEC blocks the builtin provides."""
     import re
+
     from linmot_st.toolchain import matiec
     declared = set()
     for path in matiec.find().lib.glob("*.txt"):

@@ -8,6 +8,7 @@ from __future__ import annotations
 import string
 
 import pytest
+
 from linmot_st.toolchain.builtin import BuiltinCompileError, check_text, stdfuncs
 from linmot_st.toolchain.builtin.checker import Checker
 from linmot_st.toolchain.builtin.checker.std_calls import RULES

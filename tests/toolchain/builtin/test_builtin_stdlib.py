@@ -7,11 +7,9 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-
 import pytest
 
-from linmot_st.toolchain.builtin import BuiltinCompileError, check_text
-from linmot_st.toolchain.builtin import stdfuncs
+from linmot_st.toolchain.builtin import BuiltinCompileError, check_text, stdfuncs
 from linmot_st.toolchain.testing import requires_matiec
 
 ELEMENTARY = ["BOOL", "SINT", "INT", "DINT", "LINT", "USINT", "UINT", "UDINT", "ULINT", "BYTE", "WORD", "DWORD",

@@ -114,8 +114,8 @@ class Case:
 def parse_value(text: str):
     text = text.strip()
     if re.fullmatch(r"(?i)(T|TIME)#[-0-9a-z_.]+", text):
-        from linmot_st.toolchain.builtin.parser import _duration_ns
         from linmot_st.toolchain.builtin.ast import Pos
+        from linmot_st.toolchain.builtin.parser import _duration_ns
         return _duration_ns(text, Pos("<expect>", 0, 0))
     return pyast.literal_eval(text)
 

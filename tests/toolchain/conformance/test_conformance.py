@@ -13,8 +13,8 @@ import tempfile
 from pathlib import Path
 
 import pytest
-
 from conformance_lib import Case, all_cases, batch_source, single_source
+
 from linmot_st.plc import Plc, PlcFault
 from linmot_st.toolchain import CompileError, build
 from linmot_st.toolchain.matiec.for_semantics import probe

@@ -9,8 +9,8 @@ The E1100 lists 1000h, 1001h, 1005h, 1006h, 1008h, 1018h and the PDO communicati
 from __future__ import annotations
 
 import struct
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 from .. import codes
 from ..codes import SdoAbort

@@ -21,10 +21,9 @@ is synchronous, an RxPDO's own type is 1, or parameter 2042h asks for it. PDOs f
 from __future__ import annotations
 
 import struct
-from typing import Callable
+from collections.abc import Callable
 
-from ...protocol.upids import (V_LOGGED_ERROR,
-                               V_STATE_VAR, V_STATUS_WORD, V_WARN_WORD)
+from ...protocol.upids import V_LOGGED_ERROR, V_STATE_VAR, V_STATUS_WORD, V_WARN_WORD
 
 # mapping parameters (interface layer; UPIDs INVENTED)
 P_TX_MODE = (0x2030, 0x2035, None)              # 0 = default content, 1 = by UPID (TxPDO3: always by UPID)

@@ -9,8 +9,8 @@ requests get an abort frame.
 from __future__ import annotations
 
 import struct
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 from .. import codes
 from ..codes import SdoAbort

@@ -19,7 +19,7 @@ from __future__ import annotations
 import csv
 import json
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache
 from pathlib import Path
 
 from .. import codes
@@ -29,7 +29,7 @@ from ..codes import SdoAbort
 from .drive import E1100Drive
 from .manufacturer import Service
 from .model import DriveModel
-from .params import NoValueAccess, NotWritable, OutOfRange, UnknownUpid
+from .params import NotWritable, NoValueAccess, OutOfRange, UnknownUpid
 from .profile import B1100_PROFILE
 
 DEFAULT_NODE_ID = 63                  # MACID Parameter Value 6081h, default 63 ([CO1100] p.9-10)
@@ -109,7 +109,7 @@ B1100_SERVICES: tuple[Service, ...] = (
 
 # ---------------------------------------------------------------- the E1100 view of the B1100's parameters
 
-@lru_cache(maxsize=None)
+@cache
 def e1100_counterparts(profile_path: Path = B1100_PROFILE) -> dict[int, int]:
     """B1100 UPID -> the E1100 UPID of the row it corresponds to (data/b1100_parameters.csv `e1100_upid`)."""
     spec = json.loads(Path(profile_path).read_text(encoding="utf-8"))
@@ -174,7 +174,7 @@ class B1100Drive(E1100Drive):
             ident.subs.pop(s, None)
         ident.subs[0].default = ident.subs[0].value = 1
 
-    def motion_params(self, store) -> "E1100View":
+    def motion_params(self, store) -> E1100View:
         return E1100View(store, e1100_counterparts(Path(self.model.profile)))
 
     def _start_boot(self, t: int) -> None:

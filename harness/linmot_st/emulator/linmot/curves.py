@@ -49,7 +49,7 @@ class Curve:
 
     @classmethod
     def build(cls, curve_id: int, setpoints: list[int], *, name: str = "", x_length: int = 0,
-              object_type: int = 0x0003, x_dim: int = 0x001A, y_dim: int = 0x0005) -> "Curve":
+              object_type: int = 0x0003, x_dim: int = 0x001A, y_dim: int = 0x0005) -> Curve:
         """A curve with an info block laid out as seeds table 6 (wizard fields 0)."""
         info = struct.pack("<HHHH22sHIHHH28s", INFO_BLOCK_SIZE, object_type, len(setpoints), 4,
                            name.encode("latin-1"), curve_id, x_length, x_dim, y_dim, 0, b"")

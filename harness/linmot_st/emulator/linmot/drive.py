@@ -13,26 +13,25 @@ import itertools
 import threading
 from dataclasses import dataclass, field
 
+from ...bus.frame import Frame
+from ...protocol.upids import P_BRAKE_OPERATION_ENABLED
+from ...protocol.words import ERROR, SETUP_ERROR
 from .. import codes
-from ..codes import SdoAbort
-from .command_table import CommandTable
 from ..cia301.nmt import BOOTING, OFF, OPERATIONAL, PRE_OPERATIONAL, STOPPED, NmtSlave
 from ..cia301.objects import CommObjects
 from ..cia301.pdo import ProcessData
+from ..cia301.sdo import Pending, Reply, SdoServer
+from ..codes import SdoAbort
+from .command_table import CommandTable
 from .curves import CurveStore
 from .errorlog import ErrorLog
 from .io import DriveIO, IoSettings
 from .manufacturer import ManufacturerObjects
-from ..cia301.sdo import Reply
+from .model import E1100, DriveModel
 from .motion import MotionControl, MotionSettings
-from ...protocol.words import ERROR, SETUP_ERROR
-from ...protocol.upids import P_BRAKE_OPERATION_ENABLED
 from .options import ProtocolOptions
 from .params import ParameterStore
-from .model import E1100, DriveModel
 from .profile import DriveProfile
-from ..cia301.sdo import Pending, SdoServer
-from ...bus.frame import Frame
 
 MS = 1_000_000
 S = 1_000_000_000
@@ -56,7 +55,7 @@ class DriveTimings:
     pdo_latency_ns: int = 100_000             # event -> TxPDO ready (INVENTED)
 
     @classmethod
-    def fast(cls, **changes) -> "DriveTimings":
+    def fast(cls, **changes) -> DriveTimings:
         """Short durations for real-time tests on python-can buses (nothing waits seconds)."""
         base = dict(boot_ns=20 * MS, reset_communication_ns=2 * MS, mc_stop_ns=5 * MS, mc_start_ns=20 * MS,
                     set_default_ns=(10 * MS, 20 * MS, 10 * MS, 10 * MS), flash_base_ns=10 * MS,

@@ -23,11 +23,16 @@ from __future__ import annotations
 
 import heapq
 import itertools
+from collections.abc import Callable
 from dataclasses import dataclass, replace
-from typing import Callable, NamedTuple
+from typing import NamedTuple
 
 from ...protocol.upids import (
-    P_TRIG_FALL_DELAY, P_TRIG_FALL_INHIBIT, P_TRIG_RISE_DELAY, P_TRIG_RISE_INHIBIT, P_TRIGGER_MODE,
+    P_TRIG_FALL_DELAY,
+    P_TRIG_FALL_INHIBIT,
+    P_TRIG_RISE_DELAY,
+    P_TRIG_RISE_INHIBIT,
+    P_TRIGGER_MODE,
 )
 
 X4_INPUTS = tuple(f"X4.{n}" for n in range(3, 13))       # any X4 pin can be read (general purpose IO)
@@ -56,7 +61,7 @@ class IoSettings:
     analog_min_v: float = 0.0
     analog_max_v: float = 10.0
 
-    def with_(self, **changes) -> "IoSettings":
+    def with_(self, **changes) -> IoSettings:
         return replace(self, **changes)
 
 

@@ -12,15 +12,15 @@ choice).
 from __future__ import annotations
 
 import struct
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
-from typing import Callable, Iterable, Mapping
 
 from .. import codes
 from ..cia301.objects import INTEGER32, UNSIGNED32
 from ..cia301.sdo import Reply
 from ..codes import NoMoreData, NotStarted, SdoAbort
+from .params import NotWritable, NoValueAccess, OutOfRange, UnknownUpid
 from .paramtypes import stringlets_of
-from .params import NoValueAccess, NotWritable, OutOfRange, UnknownUpid
 
 BASE = 0x2000
 LAST = 0x5FFF

@@ -16,11 +16,16 @@ from __future__ import annotations
 import bisect
 import csv
 import math
-from typing import Callable, Protocol, Sequence
+from collections.abc import Callable, Sequence
+from typing import Protocol
 
 from ...protocol.upids import (
-    P_MASTER_ENCODER_COUNTS_PER_REV, P_MASTER_ENCODER_DECODING, P_MASTER_ENCODER_DIRECTION,
-    P_MASTER_ENCODER_SOURCE, P_MASTER_ENCODER_SPEED_FILTER, P_MASTER_ENCODER_TYPE,
+    P_MASTER_ENCODER_COUNTS_PER_REV,
+    P_MASTER_ENCODER_DECODING,
+    P_MASTER_ENCODER_DIRECTION,
+    P_MASTER_ENCODER_SOURCE,
+    P_MASTER_ENCODER_SPEED_FILTER,
+    P_MASTER_ENCODER_TYPE,
 )
 
 NS = 1e-9

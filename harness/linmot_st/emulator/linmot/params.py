@@ -8,10 +8,10 @@ read-only parameters. Every value goes through the bus as 32 bits and is masked 
 from __future__ import annotations
 
 from bisect import bisect_left
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
-from .paramtypes import text_of, stringlets_of
+from .paramtypes import stringlets_of, text_of
 from .profile import ParamDef
 
 

@@ -186,7 +186,7 @@ class DriveProfile:
 
     # ---- derived drives ----
     def with_tree(self, layer: int, *, tree_id: int | None = None, main_version: int | None = None,
-                  sub_version: int | None = None, tree_file: str | None = None) -> "DriveProfile":
+                  sub_version: int | None = None, tree_file: str | None = None) -> DriveProfile:
         """The same drive with another parameter tree installed in `layer` (1 OS, 2 MC, 3 Interface, 4 Appl)."""
         self.layer(layer)
         changes = {k: v for k, v in dict(tree_id=tree_id, main_version=main_version, sub_version=sub_version,
@@ -194,7 +194,7 @@ class DriveProfile:
         layers = tuple(replace(lay, **changes) if lay.number == layer else lay for lay in self.layers)
         return replace(self, layers=layers)
 
-    def with_defaults(self, defaults: dict[int, int | str]) -> "DriveProfile":
+    def with_defaults(self, defaults: dict[int, int | str]) -> DriveProfile:
         """The same drive with other default (= factory ROM) values for some listed parameters
         (a text for a string header)."""
         known = {d.upid: d for d in self.parameters}
@@ -212,13 +212,13 @@ class DriveProfile:
                 params[upid] = replace(d, default=int(value))
         return replace(self, parameters=tuple(params[d.upid] for d in self.parameters))
 
-    def with_parameters(self, defs: list[ParamDef], *, replace_all: bool = False) -> "DriveProfile":
+    def with_parameters(self, defs: list[ParamDef], *, replace_all: bool = False) -> DriveProfile:
         """Add (or, with replace_all, substitute) parameter definitions; a UPID given again replaces the old row."""
         new = {d.upid: d for d in defs}
         base = [] if replace_all else [d for d in self.parameters if d.upid not in new]
         return replace(self, parameters=tuple(sorted(base + list(new.values()), key=lambda d: d.upid)))
 
-    def with_identity(self, **changes) -> "DriveProfile":
+    def with_identity(self, **changes) -> DriveProfile:
         return replace(self, identity=replace(self.identity, **changes))
 
 

@@ -16,8 +16,15 @@ import argparse
 import sys
 from dataclasses import dataclass
 
-from ...cliargs import (UsageError, can_bitrate, check_output_file, check_output_folder, error, int_range,
-                       positive_seconds)
+from ...cliargs import (
+    UsageError,
+    can_bitrate,
+    check_output_file,
+    check_output_folder,
+    error,
+    int_range,
+    positive_seconds,
+)
 
 
 def _node_ids(text: str) -> list[int]:
@@ -189,9 +196,9 @@ def prepare_run(args: argparse.Namespace, *, flash: bool = True, reset: bool = T
     from pathlib import Path
 
     from linmot_st.pvl.cli import load_or_report
+    from linmot_st.pvl.dataset import DatasetError
     from linmot_st.toolchain import CompileError
 
-    from linmot_st.pvl.dataset import DatasetError
     from .datasets import Datasets
     from .project import TASK_INTERVAL_NS, build_project, prepare
     from .runner import RunOptions, check_bus_spec
@@ -338,6 +345,7 @@ def _memory_file(folder: str, node: int):
 def _remembering_drives(folder: str, opts, datasets=None):
     """A drive factory: each emulated drive with the memory a previous run left in `folder` (if any)."""
     from linmot_st.emulator.linmot import memory
+
     from .runner import emulated_drive
 
     def factory(node: int):
@@ -351,6 +359,7 @@ def _remembering_drives(folder: str, opts, datasets=None):
 
 def _keep_drives(folder: str, drives: dict) -> None:
     from pathlib import Path
+
     from linmot_st.emulator.linmot import memory
 
     Path(folder).mkdir(exist_ok=True)

@@ -38,7 +38,7 @@ class Datasets:
     per_node: dict[int, Source] = field(default_factory=dict)
 
     @classmethod
-    def build(cls, pvl, name: str, per_node: dict[int, tuple[object, str]] | None = None) -> "Datasets":
+    def build(cls, pvl, name: str, per_node: dict[int, tuple[object, str]] | None = None) -> Datasets:
         """`per_node`: node -> (pvl, name). Raises DatasetError when a dataset does not fit the format."""
         default = _source(pvl, name)
         sources = {_words(default): default}

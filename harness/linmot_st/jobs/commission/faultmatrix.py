@@ -23,15 +23,17 @@ drive is switched on again) and a second run on the same PLC and drive must succ
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from typing import Any
 
 from linmot_st.bus import Frame, SimBus
-from .project import MAILBOX
 from linmot_st.cosim import CoSim
 from linmot_st.emulator import DriveTimings
 from linmot_st.emulator.models import make_drive
 from linmot_st.plc import Plc, PlcFault
+
+from .project import MAILBOX
 from .runner import RunOptions, _configure, node_id_table, phase_name
 from .testing import example, project_build
 from .verify import drive_state, verify

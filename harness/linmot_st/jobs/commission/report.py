@@ -25,6 +25,7 @@ from linmot_st.bus.trace import write_trace
 from linmot_st.protocol.errors import describe
 from linmot_st.pvl import LAYERS
 from linmot_st.pvl.dataset import Dataset, expected_exchanges
+
 from .plots import ReadBack, curve_read_backs, plot_curve
 from .runner import RunResult
 from .verify import Verification
@@ -216,7 +217,7 @@ class Report:
         )
         return self.figures
 
-    def _dataset_groups(self, own: set[int] | None) -> list["DatasetGroup"]:
+    def _dataset_groups(self, own: set[int] | None) -> list[DatasetGroup]:
         """The first file's group (its nodes: `own`, None = every axis), then one per other dataset file."""
         r, sets = self.run, self.run.datasets
         nodes = [ax.node_id for ax in r.axes]
@@ -234,7 +235,7 @@ class Report:
         return bus_stats(self.run.trace, self.run.bit_ns, t0, t1).busy_ns
 
     # ------------------------------------------------------------------ words
-    def _group_of(self, node: int) -> "DatasetGroup":
+    def _group_of(self, node: int) -> DatasetGroup:
         """The dataset file this axis was commissioned with (its captions and curve names)."""
         return next((g for g in self.groups if node in g.nodes), None) or DatasetGroup(
             self.ctx.pvl_path, self.pvl, self.dataset, [])

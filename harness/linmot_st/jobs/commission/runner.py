@@ -14,11 +14,11 @@ injection on the SimBus).
 from __future__ import annotations
 
 import functools
-
 import os
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from typing import Any
 
 from linmot_st.bus import Frame, SimBus, frame_length_bits, open_bus
 from linmot_st.bus.bits import max_bus_bits
@@ -37,7 +37,7 @@ from .verify import drive_state
 PHASES = ("idle", "wait", "start", "check", "compare", "preflight", "params", "curves", "ct", "flash", "reset", "verify", "done")
 
 
-@functools.lru_cache(maxsize=None)      # the sampler asks for every axis before every scan
+@functools.cache      # the sampler asks for every axis before every scan
 def phase_name(enum_value: str) -> str:
     """LM_COM_PARAMS -> params."""
     return enum_value.removeprefix("LM_COM_").lower()

@@ -12,10 +12,9 @@ import time
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 
+from linmot_st.cosim import IdlePredicate
 from linmot_st.jobs.commission.project import INSTANCE
 from linmot_st.jobs.commission.runner import RunOptions, RunResult, run
-from linmot_st.cosim import IdlePredicate
-
 from linmot_st.protocol.upids import P_MASTER_ENCODER_SOURCE, P_TRIGGER_MODE
 
 from .plan import CAM_TURN_MS, INPUT_EDGE_DELAY_MS, INPUT_PULSE_MS, MAX_STEPS, Plan

@@ -20,8 +20,14 @@ from dataclasses import dataclass, field
 
 from linmot_st.emulator import E1100Drive
 from linmot_st.emulator.linmot.motion import MotionSettings
-from linmot_st.protocol.upids import (P_HOME_POSITION, P_HOMING_MODE, P_INITIAL_POSITION, P_LIMIT_NEGATIVE,
-                                      P_LIMIT_POSITIVE, P_LIMITS_ENABLE)
+from linmot_st.protocol.upids import (
+    P_HOME_POSITION,
+    P_HOMING_MODE,
+    P_INITIAL_POSITION,
+    P_LIMIT_NEGATIVE,
+    P_LIMIT_POSITIVE,
+    P_LIMITS_ENABLE,
+)
 
 MM = 10_000                     # 0.1 um per mm
 PLACE_MARGIN_MM = 1.0           # a placed stop lies this far beyond the plan's extreme position

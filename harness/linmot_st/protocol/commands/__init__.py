@@ -16,9 +16,20 @@ from __future__ import annotations
 import struct
 
 from .row import (  # noqa: F401 (the catalogue's API)
-    B1100, COMMANDS, E1100, IN_ANY_STATE, IN_OPERATION_ENABLED, CommandDef, Field, Kind, Start, Target,
-    Transport, register,
+    B1100,
+    COMMANDS,
+    E1100,
+    IN_ANY_STATE,
+    IN_OPERATION_ENABLED,
+    CommandDef,
+    Field,
+    Kind,
+    Start,
+    Target,
+    Transport,
+    register,
 )
+
 # the groups register their rows on import, in this order (COMMANDS keeps it; isort leaves it alone); their ID
 # constants are the catalogue's names (C.VAI_GO_TO_POS)
 # isort: off

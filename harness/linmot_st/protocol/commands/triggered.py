@@ -16,9 +16,9 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass
 
-from .row import CommandDef, Field, Kind, Start, Target, register, seed_drives
-from .curves import TIME_CURVE_OFFSET_TIME_AMP, TIME_CURVE_TO_POS, TIME_CURVE_TO_POS_TIME
 from .command_table import START_COMMAND_TABLE
+from .curves import TIME_CURVE_OFFSET_TIME_AMP, TIME_CURVE_TO_POS, TIME_CURVE_TO_POS_TIME
+from .row import CommandDef, Field, Kind, Start, Target, register, seed_drives
 
 
 class Units(enum.Enum):

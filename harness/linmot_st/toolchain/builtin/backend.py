@@ -6,10 +6,12 @@ import importlib.util
 import json
 from pathlib import Path
 
-from .. import cc
+from .. import (
+    builtin,  # its compile_to_c looked up at each call (tests replace it)
+    cc,
+)
 from ..backend import Generated, Rejected
 from ..sources import Sources
-from .. import builtin      # its compile_to_c looked up at each call (tests replace it)
 from . import PACKAGE_DIR, backend_version
 from .errors import BuiltinCompileError
 

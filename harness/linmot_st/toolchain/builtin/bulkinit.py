@@ -32,7 +32,7 @@ class BulkInts:
 
     __slots__ = ("values", "start", "text", "lines")
 
-    def __init__(self, values: list[int], start: int, text: str, lines: "_Lines") -> None:
+    def __init__(self, values: list[int], start: int, text: str, lines: _Lines) -> None:
         self.values, self.start, self.text, self.lines = values, start, text, lines
 
     def __eq__(self, other: object) -> bool:

@@ -17,7 +17,7 @@ from lark import Token
 
 from . import ast as A
 from . import bulkinit
-from .errors import Diagnostic, BuiltinCompileError
+from .errors import BuiltinCompileError, Diagnostic
 
 # MatIEC's C pragma {{ ... }}: iec2c pastes its text into the C it writes, unchecked
 C_PRAGMA = ("C pragmas ({{ ... }}) are not supported by the builtin compiler: iec2c pastes their text into its "

@@ -21,7 +21,8 @@ from pathlib import Path
 
 from linmot_st.plc import Plc
 
-from .. import build, cache as _cache
+from .. import build
+from .. import cache as _cache
 from .tool import find, version
 
 GUARD = 20     # more iterations than any probe loop runs under IEC semantics: a loop that goes on spins

@@ -113,7 +113,7 @@ def decisions(stmts: list) -> list:
 
 def elsif_lines(path: Path) -> list[int]:
     """The lines of the tests of every ELSIF in an ST file, sorted (read with the builtin parser)."""
-    from ..builtin.parser import parse   # lark loads on first use: `linmot-st --help` imports this module
+    from ..builtin.parser import parse  # lark loads on first use: `linmot-st --help` imports this module
     try:
         elements = parse(Path(path).read_text(errors="replace"), str(path))
     except (BuiltinCompileError, OSError, RecursionError):

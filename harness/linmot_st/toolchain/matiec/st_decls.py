@@ -79,7 +79,7 @@ def _vars(blocks, target: dict[str, TypeSpec]) -> None:
 
 def scan(files: list[tuple[str, str]]) -> Declarations:
     """Declarations of the given (name, text) sources, in order (included files are given separately)."""
-    from ..builtin.parser import parse   # lark loads on first use: `linmot-st --help` imports this module
+    from ..builtin.parser import parse  # lark loads on first use: `linmot-st --help` imports this module
 
     decls = Declarations()
     for name, text in files:
@@ -100,5 +100,5 @@ def scan(files: list[tuple[str, str]]) -> Declarations:
 
 
 def scan_paths(paths: list[Path], root: Path, search: list[Path] = ()) -> Declarations:
-    from ..builtin.loader import display_name, read_source   # (the parser: lark, on first use)
+    from ..builtin.loader import display_name, read_source  # (the parser: lark, on first use)
     return scan([(display_name(p, root, search), read_source(p)) for p in paths])

@@ -61,7 +61,7 @@ def find() -> Matiec | None:
     return None
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def flags(iec2c: Path) -> tuple[str, ...]:
     """Beremiz's choice: whichever of -f -l -p the help lists; plus, when listed, `-O l` (#line
     directives into the ST files, so gcc errors and the debug line table point at ST lines) and `-O p`."""

@@ -10,8 +10,8 @@ setpoint generation, the axis that follows it, and the trajectory record (the PD
 
 from .axis import Axis
 from .control import MotionControl
-from .settings import MotionSettings
 from .setpoints import CurvePlan, StopPlan, VaPlan
+from .settings import MotionSettings
 from .trajectory import Sample, Trajectory
 
 __all__ = ["Axis", "CurvePlan", "MotionControl", "MotionSettings", "Sample", "StopPlan", "Trajectory", "VaPlan"]

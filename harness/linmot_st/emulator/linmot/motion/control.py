@@ -14,25 +14,33 @@ Every behaviour that no source states is marked INFERRED here and listed in docs
 
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 from ....protocol import commands as C
 from ....protocol import words as W
 from ....protocol.upids import (
-    P_CW_COPY_MASK, P_CW_FORCE_MASK, P_CW_FORCE_VALUES, P_LAG_ALWAYS_ERROR, P_LAG_ALWAYS_WARN,
-    P_LAG_STANDING_ERROR, P_LAG_STANDING_WARN, P_LIMIT_NEGATIVE, P_LIMIT_POSITIVE, P_LIMITS_ENABLE,
+    P_CW_COPY_MASK,
+    P_CW_FORCE_MASK,
+    P_CW_FORCE_VALUES,
+    P_LAG_ALWAYS_ERROR,
+    P_LAG_ALWAYS_WARN,
+    P_LAG_STANDING_ERROR,
+    P_LAG_STANDING_WARN,
+    P_LIMIT_NEGATIVE,
+    P_LIMIT_POSITIVE,
+    P_LIMITS_ENABLE,
     P_READY_TO_OPERATE_MODE,
 )
+from ..master_encoder import MasterEncoder
+from . import triggered  # noqa: F401 (registers the I/O and triggered commands' handlers)
 from .axis import Axis
 from .ct_runner import CtRunner
 from .events import EventHandler
-from . import triggered  # noqa: F401 (registers the I/O and triggered commands' handlers)
 from .fast_path import FastPath
 from .interpreter import Interpreter
-from ..master_encoder import MasterEncoder
 from .pending import PendingMotions
-from .settings import MotionSettings
 from .setpoints import Hold
+from .settings import MotionSettings
 from .state_machine import StateMachine
 from .status import StatusWords
 from .stream import check as stream_check

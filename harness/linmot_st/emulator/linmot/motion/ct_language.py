@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import operator
 import struct
-from typing import Callable
+from collections.abc import Callable
 
 from ....protocol import commands as C
 from ....protocol import words as W

@@ -13,7 +13,7 @@ when a sequence ends; an MC start clears them.
 from __future__ import annotations
 
 import struct
-from typing import Callable
+from collections.abc import Callable
 
 from ....protocol import commands as C
 from ....protocol import words as W

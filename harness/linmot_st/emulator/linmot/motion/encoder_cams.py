@@ -20,8 +20,15 @@ from ....protocol import commands as C
 from ....protocol import words as W
 from ....protocol.commands import CommandDef
 from ....protocol.upids import (
-    P_CAM_MODE, P_CAM_MODULO_LENGTH, P_CURVE_AMPLITUDE, P_CURVE_OFFSET, P_QUICK_STOP_DEC, P_TRIG_CAM_CURVE_FALL,
-    P_TRIG_CAM_CURVE_RISE, P_TRIG_CAM_DELAY_FALL, P_TRIG_CAM_DELAY_RISE,
+    P_CAM_MODE,
+    P_CAM_MODULO_LENGTH,
+    P_CURVE_AMPLITUDE,
+    P_CURVE_OFFSET,
+    P_QUICK_STOP_DEC,
+    P_TRIG_CAM_CURVE_FALL,
+    P_TRIG_CAM_CURVE_RISE,
+    P_TRIG_CAM_DELAY_FALL,
+    P_TRIG_CAM_DELAY_RISE,
 )
 from .setpoints import StopPlan, _demands_by_at
 from .units import ACC_RAW

@@ -17,7 +17,7 @@ with the MC stopped, and an MC restart clear the handler; a limit switch acts on
 
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 from ....protocol import words as W
 from ....protocol.upids import P_LIMIT_SWITCH_ERROR

@@ -15,8 +15,14 @@ from operator import itemgetter
 
 from ....protocol import words as W
 from ....protocol.upids import (
-    P_LAG_ALWAYS_WARN, P_LAG_ALWAYS_ERROR, P_LAG_STANDING_WARN, P_LAG_STANDING_ERROR, P_LIMIT_POSITIVE,
-    P_LIMIT_NEGATIVE, P_LIMITS_ENABLE, P_RANGE1_UPID,
+    P_LAG_ALWAYS_ERROR,
+    P_LAG_ALWAYS_WARN,
+    P_LAG_STANDING_ERROR,
+    P_LAG_STANDING_WARN,
+    P_LIMIT_NEGATIVE,
+    P_LIMIT_POSITIVE,
+    P_LIMITS_ENABLE,
+    P_RANGE1_UPID,
 )
 from .trajectory import Sample
 

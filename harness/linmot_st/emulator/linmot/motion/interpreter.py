@@ -9,17 +9,26 @@ for a command it does not have.
 
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 from ....protocol import commands as C
 from ....protocol import words as W
 from ....protocol.commands import CommandDef, Kind, Start, Target
 from ....protocol.upids import (
-    P_CURVE_AMPLITUDE, P_CURVE_OFFSET, P_CURVE_TIME_SCALE, P_HOME_POSITION, P_PREDEF_ACC, P_PREDEF_DEC,
-    P_PREDEF_VMAX, P_QUICK_STOP_DEC, P_SCALE_ACC, P_SCALE_POS, P_SCALE_VEL,
+    P_CURVE_AMPLITUDE,
+    P_CURVE_OFFSET,
+    P_CURVE_TIME_SCALE,
+    P_HOME_POSITION,
+    P_PREDEF_ACC,
+    P_PREDEF_DEC,
+    P_PREDEF_VMAX,
+    P_QUICK_STOP_DEC,
+    P_SCALE_ACC,
+    P_SCALE_POS,
+    P_SCALE_VEL,
 )
-from . import vai_variants as VV
 from . import ct_language
+from . import vai_variants as VV
 from .curve_modify import modify_curve
 from .setpoints import CurvePlan, StopPlan, VaPlan
 from .stream import stop_streaming, stream_setpoint
@@ -211,6 +220,7 @@ HANDLERS: dict[Kind, Handler] = {
 
 # the kinds of their own modules (one line each)
 from . import encoder_cams, force_control, position_indexing, winding  # noqa: E402
+
 HANDLERS.update(encoder_cams.HANDLERS)
 HANDLERS.update(position_indexing.HANDLERS)
 HANDLERS.update(winding.HANDLERS)

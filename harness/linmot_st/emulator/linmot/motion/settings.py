@@ -90,5 +90,5 @@ class MotionSettings:
     # (tests/emulator/motion/test_motion_equivalence.py); False runs every cycle through the generic path
     quiet_cycles: bool = True
 
-    def with_(self, **changes) -> "MotionSettings":
+    def with_(self, **changes) -> MotionSettings:
         return replace(self, **changes)

@@ -8,9 +8,20 @@ from __future__ import annotations
 
 from ....protocol import words as W
 from ....protocol.upids import (
-    P_JOG_VELOCITY, P_JOG_INCREMENT, P_HOMING_MODE, P_HOME_POSITION, P_INITIAL_POSITION, P_HOMING_VMAX,
-    P_HOMING_ACC, P_GO_TO_POSITION, P_CLEARANCE_1, P_CLEARANCE_2, P_QUICK_STOP_DEC, P_LIMIT_POSITIVE,
-    P_LIMIT_NEGATIVE, P_READY_TO_OPERATE_MODE,
+    P_CLEARANCE_1,
+    P_CLEARANCE_2,
+    P_GO_TO_POSITION,
+    P_HOME_POSITION,
+    P_HOMING_ACC,
+    P_HOMING_MODE,
+    P_HOMING_VMAX,
+    P_INITIAL_POSITION,
+    P_JOG_INCREMENT,
+    P_JOG_VELOCITY,
+    P_LIMIT_NEGATIVE,
+    P_LIMIT_POSITIVE,
+    P_QUICK_STOP_DEC,
+    P_READY_TO_OPERATE_MODE,
 )
 from .setpoints import Hold, StopPlan, VaPlan
 from .units import ACC_RAW, VEL_RAW

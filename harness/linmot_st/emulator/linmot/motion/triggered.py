@@ -10,9 +10,20 @@ from ....protocol import words as W
 from ....protocol.commands import CommandDef, Kind, Start, Target
 from ....protocol.commands.triggered import TRIGGERED, Units
 from ....protocol.upids import (
-    P_ANALOG_POS_MAX, P_ANALOG_POS_MIN, P_PREDEF_ACC, P_PREDEF_DEC, P_SCALE_POS, P_SCALE_VEL,
-    P_TRIG_FALL_ACC, P_TRIG_FALL_DEC, P_TRIG_FALL_TARGET, P_TRIG_FALL_VMAX, P_TRIG_RISE_ACC, P_TRIG_RISE_DEC,
-    P_TRIG_RISE_TARGET, P_TRIG_RISE_VMAX,
+    P_ANALOG_POS_MAX,
+    P_ANALOG_POS_MIN,
+    P_PREDEF_ACC,
+    P_PREDEF_DEC,
+    P_SCALE_POS,
+    P_SCALE_VEL,
+    P_TRIG_FALL_ACC,
+    P_TRIG_FALL_DEC,
+    P_TRIG_FALL_TARGET,
+    P_TRIG_FALL_VMAX,
+    P_TRIG_RISE_ACC,
+    P_TRIG_RISE_DEC,
+    P_TRIG_RISE_TARGET,
+    P_TRIG_RISE_VMAX,
 )
 from .interpreter import HANDLERS
 from .units import ACC_RAW, VEL_RAW

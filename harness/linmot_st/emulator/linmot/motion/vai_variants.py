@@ -5,11 +5,15 @@ Select Position Controller Set (005xh) and Reset (00Fxh). A part of the interpre
 
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 from ....protocol.commands import CommandDef, Kind, Target
 from ....protocol.upids import (
-    P_ACTIVE_CONTROLLER_SET, P_MAX_CURRENT_SET_A, P_MAX_CURRENT_SET_B, P_SCALE_POS, P_SCALE_VEL,
+    P_ACTIVE_CONTROLLER_SET,
+    P_MAX_CURRENT_SET_A,
+    P_MAX_CURRENT_SET_B,
+    P_SCALE_POS,
+    P_SCALE_VEL,
 )
 from .units import ACC_RAW, VEL_RAW
 from .velocity_plan import VelocityPlan

@@ -9,8 +9,8 @@ its ST operator (durations, arithmetic, comparisons) and its C (`c`: a template 
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 from .. import types as T
 from . import c as C
