@@ -241,7 +241,7 @@ def test_samplers_that_change_no_node_spare_the_timer_reads_and_nothing_else(idl
     timer read before every scan."""
     from linmot_st.jobs.commission.runner import RunOptions, Sampler
     from linmot_st.jobs.commission.testing import project_build
-    from linmot_st.jobs.motion.budget import job_budget
+    from linmot_st.jobs.motion.budget import job_budget, job_inputs
     from linmot_st.jobs.motion.job import MotionSampler, job_drives, motion_phase, run
     from linmot_st.jobs.motion.plan import plan as make_plan
     from linmot_st.pvl import load_pvl
@@ -256,7 +256,8 @@ def test_samplers_that_change_no_node_spare_the_timer_reads_and_nothing_else(idl
             monkeypatch.setattr(Sampler, "changes_nodes", _AlwaysChangesNodes())
             monkeypatch.setattr(MotionSampler, "changes_nodes", _AlwaysChangesNodes(), raising=False)
         opts = RunOptions(axes=4, timings="fast")
-        res = run(pvl, opts, project_build(idle_build.backend), after=motion_phase(steps, 60.0, None, inhibit),
+        res = run(pvl, opts, project_build(idle_build.backend), after=motion_phase(steps, 60.0, None, inhibit,
+                                                                           budget_in=job_inputs(4, 500_000)),
                   drive_factory=job_drives(steps, opts))
         assert res.after is not None and res.after.finished
         out.append(res)
