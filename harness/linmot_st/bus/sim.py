@@ -32,6 +32,8 @@ from .bits import ERROR_FRAME_BITS, IFS_BITS, frame_length_bits
 from .faults import STAGE, Fault, Predicate
 from .frame import Frame
 from .node import check_node, is_filtered
+from .stats import bus_stats
+from .trace import write_trace
 
 STANDARD_BITRATES = (125_000, 250_000, 500_000, 1_000_000)
 _new_tuple = tuple.__new__
@@ -504,12 +506,10 @@ class SimBus:
     # -- results -------------------------------------------------------------------------------
     def stats(self, t0_ns: int = 0, t1_ns: int | None = None):
         """Bus statistics over [t0, t1) (default: from 0 to the current time); see BusStats."""
-        from .stats import bus_stats
 
         return bus_stats(self.trace, self.bit_ns, t0_ns, self.now if t1_ns is None else t1_ns)
 
     def write_trace(self, path) -> None:
         """Write the trace in the format of the file's extension (.log candump, .asc, .blf) with python-can."""
-        from .trace import write_trace
 
         write_trace(self.trace, path)

@@ -26,6 +26,7 @@ import math
 import struct
 from dataclasses import dataclass, field
 
+from linmot_st.emulator.linmot.command_table import build_entry  # the entry layout (seeds table 10)
 from linmot_st.protocol import commands as C
 from linmot_st.protocol import words as W
 
@@ -278,7 +279,6 @@ def ct_loop_strokes(samples, out_pu: int, back_pu: int) -> int:
 
 def ct_loop_program(step: Step) -> dict[int, bytes]:
     """The entries the PLC's CTWRITE step writes (plc_project/motion.st), as the catalogue encodes them."""
-    from linmot_st.emulator.linmot.command_table import build_entry  # the entry layout (seeds table 10)
 
     base, vad = step.entry, dict(vmax=round(step.velocity * 1000), acc=round(step.acceleration * 100),
                                  dec=round(step.acceleration * 100))

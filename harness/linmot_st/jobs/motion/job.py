@@ -12,11 +12,13 @@ import time
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 
-from linmot_st.cosim import IdlePredicate
+from linmot_st.cosim import CoSimTimeout, IdlePredicate
+from linmot_st.emulator.linmot.master_encoder import SpeedProfile
 from linmot_st.jobs.commission.project import INSTANCE
-from linmot_st.jobs.commission.runner import RunOptions, RunResult, run
+from linmot_st.jobs.commission.runner import RunOptions, RunResult, emulated_drive, run
 from linmot_st.protocol.upids import P_MASTER_ENCODER_SOURCE, P_TRIGGER_MODE
 
+from .budget import admission_capacity, job_inputs, measured_load, step_burst, step_load
 from .plan import CAM_TURN_MS, INPUT_EDGE_DELAY_MS, INPUT_PULSE_MS, MAX_STEPS, Plan
 
 MS = 1_000_000
@@ -153,7 +155,6 @@ class MotionSampler(IdlePredicate):
         rec.edge_ns = t + self._offset(ax.node_id, t) + INPUT_EDGE_DELAY_MS * MS
         self.changes_nodes = True
         if rec.kind == "cam":               # the conveyor: one cam length in CAM_TURN_MS, then it stops
-            from linmot_st.emulator.linmot.master_encoder import SpeedProfile
             cam = self.plan.steps[rec.index - 1].cam
             now = rec.edge_ns - INPUT_EDGE_DELAY_MS * MS
             rec.edge_end_ns = rec.edge_ns + CAM_TURN_MS * MS
@@ -174,7 +175,6 @@ class MotionSampler(IdlePredicate):
 def _write_steps(plc, plan: Plan, inhibit_100us: int = 0, budget_in=None) -> None:
     # every step carries the TxPDO2 inhibit time of the bus budget (linmot_st.jobs.motion.budget); SETUP uses it.
     # With budget_in, each step its Load and the program the steps' capacity (FB_PlcMotion's bus admission)
-    from .budget import admission_capacity, step_burst, step_load
 
     def load(kind):
         if budget_in is None:
@@ -196,7 +196,6 @@ def motion_phase(plan: Plan, timeout_s: float, progress=None, inhibit_100us: int
     bus has room for them (FB_PlcMotion's admission; None: each as soon as the axis is ready)."""
 
     def after(plc, sim, drives) -> MotionResult:
-        from linmot_st.cosim import CoSimTimeout
 
         nodes = list(drives) or list(range(1, plc[f"{INSTANCE}.AXES"] + 1))
         _write_steps(plc, plan, inhibit_100us, budget_in)
@@ -233,7 +232,6 @@ def motion_phase(plan: Plan, timeout_s: float, progress=None, inhibit_100us: int
                 result.ct_changed[n] = changed
         bus = getattr(sim, "bus", None)
         if getattr(bus, "trace", None) is not None and hasattr(bus, "bit_ns"):
-            from .budget import measured_load
             # from the end of the last axis' PDO setup: its SDO exchanges precede the process data
             ends = [r.t1_ns for ax in sampler.axes for r in ax.steps if r.kind == "setup" and r.t1_ns]
             result.bus_load = measured_load(bus.trace, bus.bit_ns, max(ends, default=result.t0_ns), result.t1_ns)
@@ -286,7 +284,6 @@ def placed_drives(stroke, opts: RunOptions, datasets=None, trigger_mode: int | N
     trigger input's mode 170Ch stored in the drive as the machine was set up (the rig wires X4.6 for the
     trigger step; a PVL that sets 170Ch is written over it by the commissioning); `encoder_source`: 172Ah, the
     master encoder wired (the conveyor of the cam steps), stored the same way."""
-    from linmot_st.jobs.commission.runner import emulated_drive
 
     def factory(node: int):
         drive = emulated_drive(node, opts, datasets, motion=stroke.settings())
@@ -316,7 +313,6 @@ def run_job(pvl, opts: RunOptions, build_result, plan: Plan, *, dataset=None, pr
     commissioning failed). The emulated drives get the mechanics plan.stroke placed (unless the caller passes
     its own drive_factory); a plan that cannot fit is refused (ValueError) before anything runs. The steps are
     admitted to the bus within `share_percent` of its bit rate (linmot_st.jobs.motion.budget.admission_capacity)."""
-    from .budget import job_inputs
 
     if plan.refusals:
         raise ValueError("the motion plan does not fit the axis: " + "; ".join(plan.refusals))

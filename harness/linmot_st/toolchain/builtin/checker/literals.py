@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import ctypes
 import functools
 import re
 
@@ -17,7 +18,6 @@ def outside_float_range(text: str) -> bool:
     i.e. beyond +-3.4E38 or, non-zero, below 1.18E-38 in magnitude: so even `LREAL#1.0E300`."""
     fn = _strtof()
     if fn is not None:
-        import ctypes
         ctypes.set_errno(0)
         fn(text.replace("_", "").encode("ascii", "replace"), None)
         return ctypes.get_errno() != 0
@@ -28,7 +28,6 @@ def outside_float_range(text: str) -> bool:
 @functools.lru_cache(maxsize=1)
 def _strtof():
     try:
-        import ctypes
         fn = ctypes.CDLL(None, use_errno=True).strtof
     except (OSError, AttributeError):
         return None
