@@ -5,19 +5,8 @@ from __future__ import annotations
 
 import pytest
 
-from linmot_st.pvl import (
-    CommandTableEntry,
-    Curve,
-    Parameter,
-    ParameterObject,
-    PvlError,
-    PvlFile,
-    demo,
-    load_pvl,
-    parse_pvl,
-    save_pvl,
-    write_pvl,
-)
+from linmot_st.pvl import PvlError, demo, load_pvl, parse_pvl, save_pvl, write_pvl
+from linmot_st.pvl.model import CommandTableEntry, Curve, Parameter, ParameterObject, PvlFile
 
 
 @pytest.mark.parametrize("name", sorted(demo.EXAMPLES))

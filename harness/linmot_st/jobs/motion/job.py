@@ -255,26 +255,23 @@ def as_commissioned(result: RunResult):
     changed = m.ram_changed if m is not None else {}
     entries = m.ct_changed if m is not None else {}
 
-    def put(table: dict, k: int, block) -> None:
-        if block is None:
-            table.pop(k, None)
-        else:
-            table[k] = block
-    for n, ps in changed.items():
-        for u, (before, _) in ps.items():
-            result.drives[n].params.by_upid[u].ram = before
-    for n, es in entries.items():
-        for k, (before, _) in es.items():
-            put(result.drives[n].ct.ram, k, before)
+    def put(side: int) -> None:
+        # side 0: the RAM as commissioning left it; 1: as the motion job left it (None: an entry not there)
+        for n, ps in changed.items():
+            for u, values in ps.items():
+                result.drives[n].params.by_upid[u].ram = values[side]
+        for n, es in entries.items():
+            table = result.drives[n].ct.ram
+            for k, blocks in es.items():
+                if blocks[side] is None:
+                    table.pop(k, None)
+                else:
+                    table[k] = blocks[side]
+    put(0)
     try:
         yield
     finally:
-        for n, ps in changed.items():
-            for u, (_, after) in ps.items():
-                result.drives[n].params.by_upid[u].ram = after
-        for n, es in entries.items():
-            for k, (_, after) in es.items():
-                put(result.drives[n].ct.ram, k, after)
+        put(1)
 
 
 def placed_drives(stroke, opts: RunOptions, datasets=None, trigger_mode: int | None = None,

@@ -13,17 +13,8 @@ import math
 from bisect import bisect_right
 from operator import itemgetter
 
+from ....protocol import upids as U
 from ....protocol import words as W
-from ....protocol.upids import (
-    P_LAG_ALWAYS_ERROR,
-    P_LAG_ALWAYS_WARN,
-    P_LAG_STANDING_ERROR,
-    P_LAG_STANDING_WARN,
-    P_LIMIT_NEGATIVE,
-    P_LIMIT_POSITIVE,
-    P_LIMITS_ENABLE,
-    P_RANGE1_UPID,
-)
 from .trajectory import Sample
 
 _PLAIN_STATES = frozenset({W.READY_TO_OPERATE, W.OPERATION_ENABLED, W.ABORTING, W.FREEZING})
@@ -40,7 +31,7 @@ class FastPath:
     def _plain(self) -> bool:
         return (self.running and self.controlled and self.state in _PLAIN_STATES and self.after_stop is None
                 and not self.ct_runner.running and not self.events.pending and not self.axis.blocked
-                and not self.par(P_RANGE1_UPID) and not self.pending.armed and self.axis.current_limit_ma is None
+                and not self.par(U.P_RANGE1_UPID) and not self.pending.armed and self.axis.current_limit_ma is None
                 and self._next_tick is not None and self.s.quiet_cycles
                 and not getattr(self.gen, "stepwise", False))   # a plan computed cycle by cycle (stepwise.py)
 
@@ -54,10 +45,10 @@ class FastPath:
         equivalence tests compare them exactly), the state lives in locals and is written back once."""
         gen, axis, par = self.gen, self.axis, self.par
         cyc, t = self.s.cycle_ns, self._next_tick
-        lag_warn, lag_err = par(P_LAG_ALWAYS_WARN, 1 << 31), par(P_LAG_ALWAYS_ERROR, 1 << 31)
-        st_warn, st_err = par(P_LAG_STANDING_WARN, 1 << 31), par(P_LAG_STANDING_ERROR, 1 << 31)
-        limits = self.homed and par(P_LIMITS_ENABLE)
-        lim_neg, lim_pos = par(P_LIMIT_NEGATIVE, -(1 << 31)), par(P_LIMIT_POSITIVE, 1 << 31)
+        lag_warn, lag_err = par(U.P_LAG_ALWAYS_WARN, 1 << 31), par(U.P_LAG_ALWAYS_ERROR, 1 << 31)
+        st_warn, st_err = par(U.P_LAG_STANDING_WARN, 1 << 31), par(U.P_LAG_STANDING_ERROR, 1 << 31)
+        limits = self.homed and par(U.P_LIMITS_ENABLE)
+        lim_neg, lim_pos = par(U.P_LIMIT_NEGATIVE, -(1 << 31)), par(U.P_LIMIT_POSITIVE, 1 << 31)
         target_ok = self.state >= W.OPERATION_ENABLED
         window, hold = self.s.in_target_window_pu, self.s.in_target_hold_ns
         gen_target = gen.target
