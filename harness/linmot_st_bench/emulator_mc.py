@@ -30,36 +30,54 @@ MOVE_NS = 300 * MS
 SYNC = Frame(0x080, b"")
 
 
-class MotionMaster:
-    """A sans-I/O bus node that commands the drives (NMT start, control word, homing, moves, SYNC)."""
+class ScriptedMaster:
+    """A sans-I/O bus node that plays a PLC's start: NMT start, then enable and home every drive by control word
+    (the script); a subclass adds its own timed frames (`next_own_ns`, `on_timer`)."""
 
     def __init__(self, node_ids: list[int], start_ns: int):
         self.ids = node_ids
-        self.next_sync = start_ns
-        self.script: list[tuple[int, Frame]] = []
+        self.script: list[tuple[int, Frame]] = [(start_ns, Frame(0x000, b"\x01\x00"))]   # all nodes Operational
         t = start_ns
-        self.script.append((t, Frame(0x000, b"\x01\x00")))                      # all nodes Operational
         for cw, dt in ((0x003E, MS), (0x003F, 50 * MS), (0x083F, 50 * MS), (0x003F, 50 * MS)):
             t += dt
             self.script += [(t, Frame(0x200 + n, struct.pack("<H", cw))) for n in node_ids]
-        self.moves_from = t + 10 * MS
-        self.count = 0
-        self.next_move = self.moves_from
+        self.homed_at = t
 
     def on_frame(self, frame, t_ns):
         return ()
 
+    def next_own_ns(self) -> int:
+        raise NotImplementedError
+
     def next_timer_ns(self):
         # called after every frame on the bus: no list built (a PLC's cost is part of the figure too)
-        t = self.next_sync if self.next_sync < self.next_move else self.next_move
+        t = self.next_own_ns()
         if self.script and self.script[0][0] < t:
             t = self.script[0][0]
         return t
 
-    def on_timer(self, t_ns):
+    def scripted(self, t_ns: int) -> list:
         out = []
         while self.script and self.script[0][0] <= t_ns:
             out.append((t_ns, self.script.pop(0)[1]))
+        return out
+
+
+class MotionMaster(ScriptedMaster):
+    """Commands the drives: the start, then moves back and forth and a SYNC every 4 ms."""
+
+    def __init__(self, node_ids: list[int], start_ns: int):
+        super().__init__(node_ids, start_ns)
+        self.next_sync = start_ns
+        self.moves_from = self.homed_at + 10 * MS
+        self.count = 0
+        self.next_move = self.moves_from
+
+    def next_own_ns(self) -> int:
+        return self.next_sync if self.next_sync < self.next_move else self.next_move
+
+    def on_timer(self, t_ns):
+        out = self.scripted(t_ns)
         if self.next_sync <= t_ns:
             out.append((t_ns, SYNC))
             self.next_sync += SYNC_NS

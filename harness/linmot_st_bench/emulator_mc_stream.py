@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import math
 import os
-import struct
 import time
 
 from linmot_st.bus import Frame, SimBus
@@ -21,6 +20,8 @@ from linmot_st.emulator.linmot.drive import DriveTimings, E1100Drive
 from linmot_st.emulator.linmot.profile import load_profile
 from linmot_st.emulator.models import make_drive
 from linmot_st.protocol import commands as C
+
+from .emulator_mc import ScriptedMaster
 
 MS = 1_000_000
 S = 1_000_000_000
@@ -30,35 +31,23 @@ SYNC = Frame(0x080, b"")
 STROKE = 200_000                    # 20 mm
 
 
-class StreamMaster:
-    """A sans-I/O bus node: NMT start, enable, home, then one PV setpoint and a SYNC per period."""
+class StreamMaster(ScriptedMaster):
+    """The start (emulator_mc.ScriptedMaster), then one PV setpoint and a SYNC per period."""
 
     def __init__(self, node_id: int, start_ns: int):
+        super().__init__([node_id], start_ns)
         self.node = node_id
-        t = start_ns
-        self.script: list[tuple[int, Frame]] = [(t, Frame(0x000, b"\x01\x00"))]
-        for cw, dt in ((0x003E, MS), (0x003F, 50 * MS), (0x083F, 50 * MS), (0x003F, 50 * MS)):
-            t += dt
-            self.script.append((t, Frame(0x200 + node_id, struct.pack("<H", cw))))
-        self.stream_from = (t + 10 * MS) // PERIOD_NS * PERIOD_NS + PERIOD_NS
+        self.stream_from = (self.homed_at + 10 * MS) // PERIOD_NS * PERIOD_NS + PERIOD_NS
         self.next_sync = start_ns          # SYNC from the start: the drive takes its RxPDOs on SYNC
         self.next_point = self.stream_from - LEAD_NS
         self.k = 0
         self.count = 0
 
-    def on_frame(self, frame, t_ns):
-        return ()
-
-    def next_timer_ns(self):
-        t = self.next_sync if self.next_sync < self.next_point else self.next_point
-        if self.script and self.script[0][0] < t:
-            t = self.script[0][0]
-        return t
+    def next_own_ns(self) -> int:
+        return self.next_sync if self.next_sync < self.next_point else self.next_point
 
     def on_timer(self, t_ns):
-        out = []
-        while self.script and self.script[0][0] <= t_ns:
-            out.append((t_ns, self.script.pop(0)[1]))
+        out = self.scripted(t_ns)
         if self.next_point <= t_ns:
             tau = self.k * PERIOD_NS / S
             w = 2 * math.pi

@@ -30,6 +30,7 @@ from linmot_st.emulator.models import make_drive
 from linmot_st.plc import Plc, PlcFault
 from linmot_st.pvl.dataset import expected_exchanges, from_pvl
 
+from ..span import Span
 from .datasets import Datasets, Source, check_drive_type, drive_series
 from .project import INSTANCE, MAILBOX, MAX_AXES
 from .verify import drive_state
@@ -100,7 +101,7 @@ class RunOptions:
 
 
 @dataclass
-class PhaseRecord:
+class PhaseRecord(Span):
     phase: str
     t0_ns: int                  # time of its first scan
     scan0: int
@@ -109,14 +110,6 @@ class PhaseRecord:
     scan1: int = 0
     exchanges: int = 0
     items_total: int = 0
-
-    @property
-    def scans(self) -> int:
-        return self.scan1 - self.scan0
-
-    @property
-    def duration_ns(self) -> int:
-        return self.t1_ns - self.t0_ns
 
 
 @dataclass

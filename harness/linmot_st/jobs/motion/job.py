@@ -18,6 +18,7 @@ from linmot_st.jobs.commission.project import INSTANCE
 from linmot_st.jobs.commission.runner import RunOptions, RunResult, emulated_drive, run
 from linmot_st.protocol.upids import P_MASTER_ENCODER_SOURCE, P_TRIGGER_MODE
 
+from ..span import Span
 from .budget import admission_capacity, job_inputs, measured_load, step_burst, step_load
 from .plan import CAM_TURN_MS, INPUT_EDGE_DELAY_MS, INPUT_PULSE_MS, MAX_STEPS, Plan
 
@@ -28,7 +29,7 @@ ENCODER_SOURCE_X10 = 1          # 172Ah: the master encoder on X10 ([MC] 7.3; th
 
 
 @dataclass
-class StepRecord:
+class StepRecord(Span):
     index: int                  # 1-based, as StepNo
     kind: str
     label: str
@@ -47,14 +48,6 @@ class StepRecord:
                                 # turning (the drive's clock)
     edge_end_ns: int = 0        # cam: when it stopped
     probed_mm: float | None = None      # probe: the position the PLC read
-
-    @property
-    def scans(self) -> int:
-        return self.scan1 - self.scan0
-
-    @property
-    def duration_ns(self) -> int:
-        return self.t1_ns - self.t0_ns
 
 
 @dataclass
