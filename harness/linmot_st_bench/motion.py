@@ -58,7 +58,7 @@ def measure(axes: int, fast_idle: bool = True, report: Path | None = None, c_sha
     """One demo run; its figures (simulated s, wall s, ratio, scans, of which idle in C, frames)."""
     from linmot_st.cli import build_parser
     from linmot_st.jobs.commission.cli import commission_report, prepare_run, write_outputs
-    from linmot_st.jobs.motion.budget import job_budget
+    from linmot_st.jobs.motion.budget import job_budget, job_inputs
     from linmot_st.jobs.motion.check import check_motion
     from linmot_st.jobs.motion.cli import command_line
     from linmot_st.jobs.motion.job import job_drives, motion_phase, run
@@ -73,7 +73,9 @@ def measure(axes: int, fast_idle: bool = True, report: Path | None = None, c_sha
     steps = make_plan(prep.pvl, 50.0)
     opts = dataclasses.replace(prep.opts, fast_idle=fast_idle)
     idle = []
-    motion = motion_phase(steps, 120.0, inhibit_100us=job_budget(axes, opts.bitrate)[1].interval_100us)
+    # the steps admitted to the bus as run_job admits them (the job's default share)
+    motion = motion_phase(steps, 120.0, inhibit_100us=job_budget(axes, opts.bitrate)[1].interval_100us,
+                          budget_in=job_inputs(axes, opts.bitrate))
 
     def after(plc, sim, drives):
         out = motion(plc, sim, drives)
