@@ -328,12 +328,11 @@ class CoSim:
         one. Without it the predicate is called before every scan."""
         watch = getattr(predicate, "idle_watch", None)
         k = 0
-        declares = hasattr(predicate, "changes_nodes")
         current = False         # the first scan reads every node's timer (the caller may have changed a node)
         while k < max_scans:
             if predicate():
                 return k
-            current = current and declares and not predicate.changes_nodes
+            current = current and not getattr(predicate, "changes_nodes", True)
             k += self._advance(max_scans - k, watch, current) if watch is not None else self._advance(1, None, current)
             current = True
         if predicate():

@@ -506,10 +506,8 @@ class SimBus:
     # -- results -------------------------------------------------------------------------------
     def stats(self, t0_ns: int = 0, t1_ns: int | None = None):
         """Bus statistics over [t0, t1) (default: from 0 to the current time); see BusStats."""
-
         return bus_stats(self.trace, self.bit_ns, t0_ns, self.now if t1_ns is None else t1_ns)
 
     def write_trace(self, path) -> None:
         """Write the trace in the format of the file's extension (.log candump, .asc, .blf) with python-can."""
-
         write_trace(self.trace, path)

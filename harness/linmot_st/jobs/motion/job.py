@@ -189,7 +189,6 @@ def motion_phase(plan: Plan, timeout_s: float, progress=None, inhibit_100us: int
     bus has room for them (FB_PlcMotion's admission; None: each as soon as the axis is ready)."""
 
     def after(plc, sim, drives) -> MotionResult:
-
         nodes = list(drives) or list(range(1, plc[f"{INSTANCE}.AXES"] + 1))
         _write_steps(plc, plan, inhibit_100us, budget_in)
         plc[f"{INSTANCE}.RUNMOTION"] = True
