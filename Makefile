@@ -9,7 +9,7 @@ STAMP  := $(VENV)/.installed
 
 # st_lib's coverage comes from the tests of st_lib (a subset: coverage builds of the whole suite would
 # compile every test's program again for little more of st_lib; docs/coverage.md)
-ST_COVERAGE_TESTS := tests/st_lib/test_stlib_*.py tests/st_lib/motion/test_stlib_*.py \
+ST_COVERAGE_TESTS := tests/st_lib/test_stlib_*.py tests/st_lib/test_plcopen.py tests/st_lib/motion/test_stlib_*.py \
                      tests/st_lib/motion/test_motion_fbs.py tests/st_lib/motion/test_motion_budget.py \
                      tests/st_lib/commission/test_commission_st.py
 

@@ -1,5 +1,5 @@
-"""The PLCopen behaviour checks (spec/conventions.md) every FB of the library gets: the configuration FBs in
-tests/st_lib/test_stlib_plcopen.py, the motion FBs in tests/st_lib/motion/test_motion_plcopen.py. `request_starts(b, t0)` names the
+"""The PLCopen behaviour checks (spec/conventions.md) every FB of the library gets: the one suite over both FB lists,
+tests/st_lib/test_plcopen.py, and the motion FBs' own rules in tests/st_lib/motion/test_motion_plcopen.py. `request_starts(b, t0)` names the
 frames that show a run started (an SDO request, a motion command): each suite passes its own."""
 
 from __future__ import annotations

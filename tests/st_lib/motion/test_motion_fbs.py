@@ -5,7 +5,7 @@ lost TxPDOs, a drive reset mid-move, errors during a move), each reported with t
 and nothing claimed done that the drive did not do. Then the PLCopen FBs of issue 22, each on the drive's
 trajectory record or its parameters: MC_MoveAdditive, MC_Jog, MC_SetPosition, FB_LmMotionCommand,
 MC_ReadParameter / MC_WriteParameter, MC_ReadActualVelocity, MC_MoveVelocity, the VAI Dec=Acc moves and
-BufferMode Buffered. The PLCopen rules every Execute-type FB keeps: tests/st_lib/motion/test_motion_plcopen.py."""
+BufferMode Buffered. The PLCopen rules every Execute-type FB keeps: tests/st_lib/test_plcopen.py."""
 
 from __future__ import annotations
 
