@@ -23,6 +23,7 @@ from . import types as T
 from . import units as U
 from .cnames import cname_of, is_time
 from .errors import BuiltinCompileError, Diagnostic
+from .inout_refs import by_reference
 from .symbols import PouSym, Program, Var
 
 FORCE = "__FORCED"
@@ -112,8 +113,13 @@ class CodeGen:
         self.chunks: list[U.Chunk] = []
         self.pending_data: list[U.Chunk] = []     # constants of the chunk being generated: placed before it
         self.data_names = 0                         # __data0, __data1 ...: one per constant chunk
+        self.by_ref = by_reference(prog)            # the FBs' in-outs passed as pointers (inout_refs.py)
 
     # ------------------------------------------------------------------ helpers
+    def is_ref(self, v: Var) -> bool:
+        """Whether v is an FB's VAR_IN_OUT held as a pointer to the actual (inout_refs.py), not a copy."""
+        return v.kind == "VAR_IN_OUT" and v.pou is not None and (v.pou.key, v.key) in self.by_ref
+
     def wrap(self, t: T.Type) -> str:
         c = cname_of(t)
         if c not in self._wrapped_set:
@@ -330,7 +336,7 @@ class CodeGen:
                 return f"  {v.ty.cname} *{v.key};"
             return f"  {v.ty.cname} {v.key};"
         c = self.wrap(v.ty)
-        if v.kind == "VAR_EXTERNAL" or v.location:
+        if v.kind == "VAR_EXTERNAL" or v.location or self.is_ref(v):
             return f"  __P_{c} {v.key};"
         return f"  __V_{c} {v.key};"
 
@@ -495,6 +501,8 @@ class CodeGen:
                                  f"{prefix}{v.key}.gflag = {self.gflag_index[gcname]}; break;")
                 lines.append("  }")
             return lines
+        if self.is_ref(v):          # set by each call before the body runs
+            return [f"  {prefix}{v.key}.flags = 0;", f"  {prefix}{v.key}.value = 0;"]
         val = self.value_of(v.init, v.ty) if v.init is not None else self.default_value(v.ty)
         if v.location:
             cell = self.prog.located[v.location]
@@ -625,7 +633,7 @@ class CodeGen:
                 return f"data__->{v.key}", None
             if v.kind == "VAR_EXTERNAL":
                 return f"(*data__->{v.key}.value)", self.external_flags(f"data__->{v.key}")
-            if v.location:
+            if v.location or self.is_ref(v):
                 return f"(*data__->{v.key}.value)", f"data__->{v.key}.flags"
             return f"data__->{v.key}.value", f"data__->{v.key}.flags"
         if isinstance(e, A.Member):
@@ -637,7 +645,7 @@ class CodeGen:
                     return f"{bp}.{v.key}", None
                 if v.kind == "VAR_EXTERNAL":
                     return f"(*{bp}.{v.key}.value)", self.external_flags(f"{bp}.{v.key}")
-                if v.location:
+                if v.location or self.is_ref(v):
                     return f"(*{bp}.{v.key}.value)", f"{bp}.{v.key}.flags"
                 return f"{bp}.{v.key}.value", f"{bp}.{v.key}.flags"
             return f"{bp}.{e.sym.key}", bflags
@@ -692,6 +700,17 @@ class CodeGen:
         ip, _ = self.inst_place(call, inst)
         posts = []
         for p, a in bound:
+            if p.kind == "VAR_IN_OUT" and self.is_ref(p):
+                src, sflags = self.place(a.value)
+                self.emit(f"{ip}.{p.key}.value = &{src};")
+                if sflags is not None:
+                    # a forced actual: the body works on a copy that is dropped, as copy-in/copy-out leaves
+                    # the actual; static, so that the pointer (and those passed on from it) stay valid and
+                    # read what the body left in it, as the copy would
+                    tmp, ct = self.new_tmp(), cname_of(p.ty)
+                    self.emit(f"if (__builtin_expect({sflags} & {FORCE}, 0)) "
+                              f"{{ static {ct} {tmp}; {tmp} = {src}; {ip}.{p.key}.value = &{tmp}; }}")
+                continue
             if p.kind == "VAR_INPUT":
                 if p.is_fb_instance:
                     self.emit(f"{ip}.{p.key} = {self.expr(a.value)};")
@@ -1174,7 +1193,7 @@ class CodeGen:
         inner = self.type_ref(v.ty, types)
         if v.is_fb_instance:
             return "ref:" + inner if v.kind == "VAR_EXTERNAL" else inner
-        if v.kind == "VAR_EXTERNAL" or v.location:
+        if v.kind == "VAR_EXTERNAL" or v.location or self.is_ref(v):
             return "ptr:" + inner
         return "var:" + inner
 
