@@ -23,7 +23,7 @@ from . import types as T
 from . import units as U
 from .cnames import cname_of, is_time
 from .errors import BuiltinCompileError, Diagnostic
-from .inout_refs import by_reference
+from .param_refs import by_reference
 from .symbols import PouSym, Program, Var
 
 FORCE = "__FORCED"
@@ -113,12 +113,12 @@ class CodeGen:
         self.chunks: list[U.Chunk] = []
         self.pending_data: list[U.Chunk] = []     # constants of the chunk being generated: placed before it
         self.data_names = 0                         # __data0, __data1 ...: one per constant chunk
-        self.by_ref = by_reference(prog)            # the FBs' in-outs passed as pointers (inout_refs.py)
+        self.by_ref = by_reference(prog)            # FB parameters passed as pointers (param_refs.py)
 
     # ------------------------------------------------------------------ helpers
     def is_ref(self, v: Var) -> bool:
-        """Whether v is an FB's VAR_IN_OUT held as a pointer to the actual (inout_refs.py), not a copy."""
-        return v.kind == "VAR_IN_OUT" and v.pou is not None and (v.pou.key, v.key) in self.by_ref
+        """Whether v is an FB parameter held as a pointer to the actual (param_refs.py), not a copy."""
+        return v.kind in ("VAR_IN_OUT", "VAR_INPUT") and v.pou is not None and (v.pou.key, v.key) in self.by_ref
 
     def wrap(self, t: T.Type) -> str:
         c = cname_of(t)
@@ -700,10 +700,10 @@ class CodeGen:
         ip, _ = self.inst_place(call, inst)
         posts = []
         for p, a in bound:
-            if p.kind == "VAR_IN_OUT" and self.is_ref(p):
+            if self.is_ref(p):
                 src, sflags = self.place(a.value)
                 self.emit(f"{ip}.{p.key}.value = &{src};")
-                if sflags is not None:
+                if sflags is not None and p.kind == "VAR_IN_OUT":
                     # a forced actual: the body works on a copy that is dropped, as copy-in/copy-out leaves
                     # the actual; static, so that the pointer (and those passed on from it) stay valid and
                     # read what the body left in it, as the copy would

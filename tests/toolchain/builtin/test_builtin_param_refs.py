@@ -1,8 +1,8 @@
-"""FB in-outs passed by reference (toolchain/builtin/inout_refs.py): which ones, the same values as
-MatIEC's copy-in/copy-out, a forced actual, and plc_project's mailbox and axis passed without copies.
+"""FB parameters passed by reference (toolchain/builtin/param_refs.py): which ones, the same values as
+MatIEC's copy-in/copy-out, a forced actual, and plc_project's mailbox, axis and steps passed without copies.
 
 The cases where a pointer would differ from the copies (and the builtin keeps copies) are conformance
-cases compared with MatIEC: pou_fb_inout_alias, pou_fb_inout_global."""
+cases compared with MatIEC: pou_fb_inout_alias, pou_fb_inout_global, pou_fb_input_alias."""
 
 from __future__ import annotations
 
@@ -12,11 +12,11 @@ from linmot_st.plc import Plc
 from linmot_st.resources import library_tree
 from linmot_st.toolchain.builtin import check_text, codegen
 from linmot_st.toolchain.builtin.checker import Checker
-from linmot_st.toolchain.builtin.inout_refs import by_reference
 from linmot_st.toolchain.builtin.loader import load
+from linmot_st.toolchain.builtin.param_refs import by_reference
 from linmot_st.toolchain.testing import build_text
 
-# In-outs of every kind the analysis decides: arrays of structs, elements whose index moves between
+# Parameters of every kind the analysis decides: arrays of structs, elements whose index moves between
 # calls, a pointer passed on two levels down, an FB skipped by EN, a FUNCTION's in-out inside the body.
 SRC = """
 TYPE t_pt : STRUCT x : INT; hist : ARRAY[0..3] OF DINT; END_STRUCT; t_pts : ARRAY[1..4] OF t_pt; END_TYPE
@@ -45,6 +45,38 @@ FUNCTION_BLOCK fb_mid
     i := i + 1;
   END_WHILE;
 END_FUNCTION_BLOCK
+FUNCTION_BLOCK fb_sum
+  VAR_INPUT pts : t_pts; END_VAR
+  VAR_IN_OUT acc : t_pt; END_VAR
+  VAR_OUTPUT total : INT; END_VAR
+  VAR i : INT; END_VAR
+  acc.x := acc.x + 1;
+  total := 0;
+  i := 1;
+  WHILE i <= 4 DO
+    total := total + pts[i].x;
+    i := i + 1;
+  END_WHILE;
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK fb_sum2
+  VAR_INPUT pts : t_pts; END_VAR
+  VAR_IN_OUT acc : t_pt; END_VAR
+  VAR_OUTPUT total : INT; END_VAR
+  VAR i : INT; END_VAR
+  acc.x := acc.x + 1;
+  total := 0;
+  i := 1;
+  WHILE i <= 4 DO
+    total := total + pts[i].x;
+    i := i + 1;
+  END_WHILE;
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK fb_scratch
+  VAR_INPUT p : t_pt; END_VAR
+  VAR_OUTPUT x : INT; END_VAR
+  p.x := p.x * 2 + 1;
+  x := p.x;
+END_FUNCTION_BLOCK
 FUNCTION_BLOCK fb_twice
   VAR_IN_OUT a, b : INT; END_VAR
   a := a + 1;
@@ -59,7 +91,7 @@ PROGRAM p_main
   VAR_EXTERNAL g : INT; END_VAR
   VAR
     pts : t_pts; n, k, s1, s2, x, y : INT; mi : fb_mid; mi2 : fb_mid; tw : fb_twice; gl : fb_glob;
-    skip : BOOL;
+    skip : BOOL; su : fb_sum; su2 : fb_sum2; sc : fb_scratch; a1 : t_pt; t1, t2, t3 : INT;
   END_VAR
   k := k MOD 4 + 1;
   mi(pts := pts, n := n, k := k, sum => s1);
@@ -68,6 +100,9 @@ PROGRAM p_main
   tw(a := x, b := y);
   tw(a := x, b := x);
   gl(a := y);
+  su(pts := pts, acc := a1, total => t1);
+  su2(pts := pts, acc := pts[2], total => t2);
+  sc(p := pts[3], x => t3);
 END_PROGRAM
 CONFIGURATION c0
   RESOURCE r0 ON PLC
@@ -79,13 +114,15 @@ END_CONFIGURATION
 """
 
 WATCHED = ["MAIN.PTS", "MAIN.N", "MAIN.K", "MAIN.S1", "MAIN.S2", "MAIN.X", "MAIN.Y", "C0.R0.G",
-           "MAIN.MI.LEAF.GOT", "MAIN.MI2.SUM"]
+           "MAIN.MI.LEAF.GOT", "MAIN.MI2.SUM", "MAIN.A1", "MAIN.T1", "MAIN.T2", "MAIN.T3"]
 
 
 def test_which_in_outs_are_pointers():
     refs = by_reference(check_text(SRC))
-    assert refs == {("FB_LEAF", "P"), ("FB_LEAF", "N"), ("FB_MID", "PTS"), ("FB_MID", "N")}
-    # fb_twice: one call binds x to both; fb_glob: it reads a global (it could be the actual)
+    assert refs == {("FB_LEAF", "P"), ("FB_LEAF", "N"), ("FB_MID", "PTS"), ("FB_MID", "N"), ("FB_SUM", "PTS"),
+                    ("FB_SUM", "ACC"), ("FB_SUM2", "ACC")}
+    # fb_twice: one call binds x to both; fb_glob: it reads a global (it could be the actual); fb_sum2's
+    # input: its call writes the same array through the in-out; fb_scratch writes its input
 
 
 def _run(res, scans: int = 30, forced: int | None = None, paths: list[str] = WATCHED) -> list:
@@ -141,5 +178,6 @@ def test_plc_project_passes_its_mailbox_and_axis_by_reference():
     refs = by_reference(Checker().check(elements, names))
     for fb, param in [("FB_PLCAXIS", "BOX"), ("FB_PLCAXIS", "SUM"), ("FB_LMCHANNEL", "BOX"), ("FB_LMCHANNEL", "AXIS"),
                       ("FB_LMCOMMISSION", "BOX"), ("FB_LMCOMMISSION", "AXIS"), ("FB_PLCMOTION", "BOX"),
-                      ("FB_PLCMOTION", "AXIS"), ("FB_PLCMOTION", "GATE"), ("FB_LMPDO", "MOTION")]:
-        assert (fb, param) in refs, f"{fb}.{param} is copied in and out again"
+                      ("FB_PLCMOTION", "AXIS"), ("FB_PLCMOTION", "GATE"), ("FB_LMPDO", "MOTION"),
+                      ("FB_PLCAXIS", "STEPS"), ("FB_PLCMOTION", "STEPS")]:
+        assert (fb, param) in refs, f"{fb}.{param} is copied again"
