@@ -389,8 +389,10 @@ static unsigned long run_scans(unsigned long n, const idle_stop_t *idle)
         if (watched && (!wd_running || wd_running_ns != watchdog_ns)) {
             watchdog_arm(1);
         } else if (watched) {
+            /* the timer runs at its own phase: its next tick may come at once, so it only starts the count
+               (a scan is stopped after 1 to 1.25 times the limit, as when the timer starts here) */
             wd_seen = plc_scans;
-            wd_stuck = 0;
+            wd_stuck = -1;
         }
         const long tick_ns = (long)common_ticktime__;
         for (unsigned long i = 0; i < n; i++) {
