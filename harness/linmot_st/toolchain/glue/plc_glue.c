@@ -22,10 +22,7 @@
  * value, so that several PLC instances and other users of the signal do not mix); a tick that finds the
  * scan count unchanged for WD_TICKS ticks ends the scan like a fault: kind 5, located at the interrupted
  * instruction. The CPU clock, not the wall clock: a loaded machine does not trip it, a spinning scan
- * does. The limit is per scan and 0 turns it off (plc_set_watchdog_ns). The timer is left running when
- * plc_step returns, so that the next call need not start it again (starting and stopping it took two system
- * calls per call, about 1.2 us, as much as a few scans of plc_project); its first tick outside a scan stops
- * it. A tick is counted only inside a scan, so the scans see the watchdog as before.
+ * does. The limit is per scan and 0 turns it off (plc_set_watchdog_ns).
  */
 #define _GNU_SOURCE
 #include <dlfcn.h>
@@ -78,12 +75,10 @@ static int wd_signal;                                   /* SIGRTMIN + 4 (SIGRTMI
 static struct sigaction wd_previous;
 static timer_t wd_timer;
 static int wd_timer_ok;
-static pthread_t wd_thread;                              /* the thread whose CPU clock the timer follows */
+static pid_t wd_tid;                                    /* the thread whose CPU clock the timer follows */
 static int wd_token;                                    /* its address tells our timer's signal */
 static volatile unsigned long long wd_seen;
 static volatile int wd_stuck;
-static volatile sig_atomic_t wd_running;                /* the timer runs (left running between calls) */
-static unsigned long long wd_running_ns;                /* ... for this limit */
 
 __attribute__((visibility("default"))) int plc_abi_version(void) { return PLC_ABI_VERSION; }
 
@@ -175,14 +170,7 @@ static void chain(int index, int sig, siginfo_t *info, void *ctx)
 static void on_watchdog(int sig, siginfo_t *info, void *ctx)
 {
     if (info && info->si_code == SI_TIMER && info->si_value.sival_ptr == (void *)&wd_token) {
-        if (!in_scan || !pthread_equal(pthread_self(), scan_thread)) {
-            /* a tick between calls: no scan runs, so stop the timer until the next call starts it */
-            struct itimerspec off;
-            memset(&off, 0, sizeof off);
-            timer_settime(wd_timer, 0, &off, NULL);
-            wd_running = 0;
-            return;
-        }
+        if (!in_scan || !pthread_equal(pthread_self(), scan_thread)) return;   /* a tick between scans */
         if (plc_scans != wd_seen) {
             wd_seen = plc_scans;
             wd_stuck = 0;
@@ -234,13 +222,12 @@ static void install_handlers(void)
 /* the watchdog timer of the calling thread's CPU clock, created on first use (again for another thread) */
 static int watchdog_timer(void)
 {
-    if (wd_timer_ok && pthread_equal(wd_thread, pthread_self())) return 1;
+    pid_t tid = (pid_t)syscall(SYS_gettid);
+    if (wd_timer_ok && wd_tid == tid) return 1;
     if (wd_timer_ok) {
         timer_delete(wd_timer);
         wd_timer_ok = 0;
-        wd_running = 0;
     }
-    pid_t tid = (pid_t)syscall(SYS_gettid);
     struct sigevent sev;
     memset(&sev, 0, sizeof sev);
     sev.sigev_notify = SIGEV_THREAD_ID;
@@ -253,7 +240,7 @@ static int watchdog_timer(void)
     sev.sigev_value.sival_ptr = (void *)&wd_token;
     if (timer_create(CLOCK_THREAD_CPUTIME_ID, &sev, &wd_timer) != 0) return 0;
     wd_timer_ok = 1;
-    wd_thread = pthread_self();
+    wd_tid = tid;
     return 1;
 }
 
@@ -270,8 +257,6 @@ static void watchdog_arm(int on)
         wd_stuck = 0;
     }
     timer_settime(wd_timer, 0, &its, NULL);
-    wd_running = on;
-    wd_running_ns = watchdog_ns;
 }
 
 __attribute__((visibility("default"))) void plc_set_watchdog_ns(unsigned long long ns) { watchdog_ns = ns; }
@@ -338,7 +323,6 @@ __attribute__((visibility("default"))) void plc_init(void)
     plc_tick = 0;
     plc_scans = 0;
     set_clock(0);
-    if (wd_running) watchdog_arm(0);       /* the initialisation runs without the watchdog, as it always did */
     scan_thread = pthread_self();
     if (sigsetjmp(scan_jmp, 1) == 0) {
         in_scan = 1;
@@ -381,19 +365,10 @@ static unsigned long run_scans(unsigned long n, const idle_stop_t *idle)
     scan_thread = pthread_self();
     install_handlers();
     const int watched = watchdog_ns && watchdog_timer();
-    if (!watched && wd_running) watchdog_arm(0);           /* turned off since the last call */
+    if (watched) watchdog_arm(1);
     if (idle && idle->n_watch) take_snapshot(idle);
     if (sigsetjmp(scan_jmp, 1) == 0) {
         in_scan = 1;
-        /* only now: from here on a tick counts and no longer stops the timer */
-        if (watched && (!wd_running || wd_running_ns != watchdog_ns)) {
-            watchdog_arm(1);
-        } else if (watched) {
-            /* the timer runs at its own phase: its next tick may come at once, so it only starts the count
-               (a scan is stopped after 1 to 1.25 times the limit, as when the timer starts here) */
-            wd_seen = plc_scans;
-            wd_stuck = -1;
-        }
         const long tick_ns = (long)common_ticktime__;
         for (unsigned long i = 0; i < n; i++) {
             if (idle) {
@@ -413,6 +388,7 @@ static unsigned long run_scans(unsigned long n, const idle_stop_t *idle)
         }
     }
     in_scan = 0;
+    if (watched) watchdog_arm(0);
     return (unsigned long)(plc_scans - start);
 }
 
