@@ -416,25 +416,25 @@ class SimBus:
         q[:n] = kept
 
     def _arbitrate(self, t: int) -> None:
+        parts, heads = self._parts, self._heads
         while True:
             winner, best, at = None, 0x800, 0
-            for p in self._parts:
-                q = p.queue
-                if q:
-                    head = q[0]
-                    if head[0] <= t:
-                        k = 0
-                        if p.by_priority:       # its ready frame of highest priority (the queue is by ready time)
-                            if len(q) > 1:
-                                self._overwrite(p, t)
-                                self._heads[p.index] = q[0][0]
-                            for i in range(1, len(q)):
-                                if q[i][0] > t:
-                                    break
-                                if q[i][2].can_id < q[k][2].can_id:
-                                    k = i
-                        if q[k][2].can_id < best:
-                            winner, best, at = p, q[k][2].can_id, k
+            for n, head in enumerate(heads):    # the participants whose queue's head is ready (NEVER: empty)
+                if head <= t:
+                    p = parts[n]
+                    q = p.queue
+                    k = 0
+                    if p.by_priority:       # its ready frame of highest priority (the queue is by ready time)
+                        if len(q) > 1:
+                            self._overwrite(p, t)
+                            heads[n] = q[0][0]
+                        for i in range(1, len(q)):
+                            if q[i][0] > t:
+                                break
+                            if q[i][2].can_id < q[k][2].can_id:
+                                k = i
+                    if q[k][2].can_id < best:
+                        winner, best, at = p, q[k][2].can_id, k
             if winner is None:
                 return
             q = winner.queue
