@@ -126,6 +126,11 @@ class SimBus:
         self._timers: list[int] = [NEVER]
         self._heads: list[int] = [NEVER]
         self._observers: list[Callable[[int], Any]] = []     # the nodes' observe(), in attach order
+        # CAN-ID -> the participants whose acceptance filter takes it, in attach order: made at a frame of that ID,
+        # dropped when any filter changes (a node's rx_filter read after a call into it is another object); kept
+        # only while every filter is None or a frozenset (a set the node could change in place is looked at anew)
+        self._receivers: dict[int, tuple[_Part, ...]] = {}
+        self._receivers_kept = True
         self._order = 0
         self._seq = 0
         self._tx: list | None = None     # in flight: [part, frame, start, end, status, retransmit]
@@ -157,6 +162,7 @@ class SimBus:
         self._heads.insert(part.index, NEVER)
         self._parts_by_name[name] = part
         self._observers = [p.observe for p in self._parts if p.observe is not None]
+        self._filters_changed()
         self._read_timer(part)
         return name
 
@@ -226,6 +232,7 @@ class SimBus:
         for i, p in enumerate(self._parts):
             p.index = i
         self._observers = [p.observe for p in self._parts if p.observe is not None]
+        self._filters_changed()
         del self._parts_by_name[part.name]
         part.queue.clear()
 
@@ -277,8 +284,13 @@ class SimBus:
         t = part.node.next_timer_ns()
         now = self.now                      # max(int(t), now) without the builtin's call: after every timer
         self._timers[part.index] = NEVER if t is None else (int(t) if t > now else now)
-        if part.filtered:
+        if part.filtered and part.node.rx_filter is not part.accepts:
             part.accepts = part.node.rx_filter
+            self._filters_changed()
+
+    def _filters_changed(self) -> None:
+        self._receivers.clear()
+        self._receivers_kept = all(p.accepts is None or type(p.accepts) is frozenset for p in self._parts)
 
     def _submit(self, part: _Part, ready: int, frame: Frame) -> None:
         if ready < self.now:
@@ -383,8 +395,9 @@ class SimBus:
             if p.has_timer:
                 t = p.node.next_timer_ns()
                 timers[p.index] = NEVER if t is None else (t if t > now else now)
-                if p.filtered:
+                if p.filtered and p.node.rx_filter is not p.accepts:
                     p.accepts = p.node.rx_filter
+                    self._filters_changed()
 
     def _fire_timer(self, part: _Part, t: int) -> None:
         self._queue_all(part, t, part.node.on_timer(t))
@@ -498,19 +511,24 @@ class SimBus:
         now = self.now
         cid = frame.can_id
         timers = self._timers
-        for p in self._parts:
+        # the receivers: every other participant whose acceptance filter takes the frame (a node it filters out is
+        # untouched), as of the start of the delivery (a node's own call can change only its own filter)
+        receivers = self._receivers.get(cid)
+        if receivers is None:
+            receivers = tuple(p for p in self._parts if p.accepts is None or cid in p.accepts)
+            if self._receivers_kept:
+                self._receivers[cid] = receivers
+        for p in receivers:
             if p is not part:
-                accepts = p.accepts
-                if accepts is not None and cid not in accepts:
-                    continue                      # its acceptance filter: the node's state is untouched
                 node = p.node
                 out = node.on_frame(frame, end)
                 if out:
                     self._queue_all(p, end, out)
                 t = node.next_timer_ns()          # _read_timer, inlined: once per receiver and frame
                 timers[p.index] = NEVER if t is None else (int(t) if t > now else now)
-                if p.filtered:
+                if p.filtered and node.rx_filter is not p.accepts:
                     p.accepts = node.rx_filter
+                    self._filters_changed()
         if duplicate and self._parts_by_name.get(part.name) is part:
             self._requeue_first(part, end, sent)
 
