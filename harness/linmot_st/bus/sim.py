@@ -284,9 +284,11 @@ class SimBus:
         t = part.node.next_timer_ns()
         now = self.now                      # max(int(t), now) without the builtin's call: after every timer
         self._timers[part.index] = NEVER if t is None else (int(t) if t > now else now)
-        if part.filtered and part.node.rx_filter is not part.accepts:
-            part.accepts = part.node.rx_filter
-            self._filters_changed()
+        if part.filtered:
+            accepts = part.node.rx_filter
+            if accepts is not part.accepts:
+                part.accepts = accepts
+                self._filters_changed()
 
     def _filters_changed(self) -> None:
         self._receivers.clear()
@@ -395,9 +397,11 @@ class SimBus:
             if p.has_timer:
                 t = p.node.next_timer_ns()
                 timers[p.index] = NEVER if t is None else (t if t > now else now)
-                if p.filtered and p.node.rx_filter is not p.accepts:
-                    p.accepts = p.node.rx_filter
-                    self._filters_changed()
+                if p.filtered:
+                    accepts = p.node.rx_filter
+                    if accepts is not p.accepts:
+                        p.accepts = accepts
+                        self._filters_changed()
 
     def _fire_timer(self, part: _Part, t: int) -> None:
         self._queue_all(part, t, part.node.on_timer(t))
@@ -490,7 +494,8 @@ class SimBus:
                 part.bus_off = True
                 part.discarded += len(part.queue) + 1
                 part.queue.clear()
-                self._heads[part.index] = NEVER
+                if self._parts_by_name.get(part.name) is part:     # (a removed sender's index is another's now)
+                    self._heads[part.index] = NEVER
             elif retransmit and self._parts_by_name.get(part.name) is part:
                 self._requeue_first(part, end, frame)
             return
@@ -526,9 +531,11 @@ class SimBus:
                     self._queue_all(p, end, out)
                 t = node.next_timer_ns()          # _read_timer, inlined: once per receiver and frame
                 timers[p.index] = NEVER if t is None else (int(t) if t > now else now)
-                if p.filtered and node.rx_filter is not p.accepts:
-                    p.accepts = node.rx_filter
-                    self._filters_changed()
+                if p.filtered:
+                    accepts = node.rx_filter
+                    if accepts is not p.accepts:
+                        p.accepts = accepts
+                        self._filters_changed()
         if duplicate and self._parts_by_name.get(part.name) is part:
             self._requeue_first(part, end, sent)
 
