@@ -20,12 +20,14 @@ received frames: the transmit confirmation of a PLC CAN driver (docs/plc-integra
 --bus virtual|socketcan:CHANNEL`): scan k starts at the wall time of the PLC's clock, and the frames
 received until then go into Rx.
 
-Mailbox access uses the loader's bound accessors, each bound once on first use, so a scan costs a few
-attribute accesses plus the PLC step.
+Mailbox access uses the loader's bound accessors, each bound once on first use; where Rx and Tx have the library's
+T_CanFrame layout, a frame is packed into (or unpacked from) the PLC's memory in one struct call (FrameCodec), so a
+scan costs a few attribute accesses plus the PLC step.
 """
 
 from __future__ import annotations
 
+import struct
 import time
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
@@ -54,6 +56,61 @@ class CoSimTimeout(TimeoutError):
     """run_until() reached max_scans (or its timeout) before the predicate held."""
 
 
+# T_CanFrame's members as a driver writes and reads them (st_lib/types/can.st), and their struct codes
+_FRAME_MEMBERS = {"ID": ("UINT", "H"), "DLC": ("USINT", "B"), "RTR": ("BOOL", "B"), "ECHO": ("BOOL", "B")}
+
+
+class FrameCodec:
+    """One ARRAY OF T_CanFrame in the PLC's memory as a struct.Struct per element: Id, Dlc, Rtr, Data (and Echo)
+    packed or unpacked in one call, the same bytes the per-member accessors write (Data's unused bytes 0, BOOL 0/1).
+    `of` gives None where the element is not exactly those members of those types (another mailbox type: the
+    accessors then do it member by member)."""
+
+    def __init__(self, view: memoryview, fmt: str, stride: int, echo: bool) -> None:
+        self.view, self.stride, self.echo = view, stride, echo
+        self.struct = struct.Struct(fmt)
+
+    @classmethod
+    def of(cls, var: Any, echo: bool) -> FrameCodec | None:
+        info = getattr(var, "info", None)
+        if info is None or not hasattr(var, "view") or info.kind != "array" or len(info.dims) != 1:
+            return None
+        elem = info.inner
+        names = ["ID", "DLC", "RTR", "DATA"] + (["ECHO"] if echo else [])
+        if elem.kind != "struct" or sorted(elem.field_order) != sorted(names):
+            return None
+        fmt, at = "=", 0           # native byte order, no implicit alignment: the offsets say where each member is
+        for name in sorted(names, key=lambda n: elem.fields[n][0]):
+            offset, t = elem.fields[name]
+            if name == "DATA":
+                ok = t.kind == "array" and t.size == 8 and t.inner.name in ("BYTE", "USINT")
+                code, size = "8s", 8
+            else:
+                ok = t.kind == "elementary" and t.name == _FRAME_MEMBERS[name][0]
+                code, size = _FRAME_MEMBERS[name][1], t.size
+            if not ok or offset < at:
+                return None
+            fmt += "x" * (offset - at) + code     # padding between members: no member lies there
+            at = offset + size
+        codec = cls(var.view(), fmt, elem.size, echo)
+        return codec if codec.struct.size <= elem.size else None
+
+    def write(self, frames: list[Frame], echoes: list[bool] | None) -> None:
+        """Elements 0..len(frames)-1 := frames (their Echo := echoes[i] where the element has it)."""
+        pack, view, stride = self.struct.pack_into, self.view, self.stride
+        for i, f in enumerate(frames):
+            # a remote frame: its DLC, no data ("8s" pads with zero bytes, as the accessors' ljust did)
+            dlc, data = (f.rtr_dlc, b"") if f.rtr else (len(f.data), f.data)
+            if self.echo:
+                pack(view, i * stride, f.can_id, dlc, f.rtr, data, bool(echoes and echoes[i]))
+            else:
+                pack(view, i * stride, f.can_id, dlc, f.rtr, data)
+
+    def read(self, i: int) -> tuple:
+        """(Id, Dlc, Rtr, Data as 8 bytes) of element i (0-based)."""
+        return self.struct.unpack_from(self.view, i * self.stride)[:4]
+
+
 class Mailbox:
     """Bound accessors of one T_CanMailbox variable of a PLC (RxCount, Rx, RxLost, TxCount, Tx, TxLost)."""
 
@@ -74,6 +131,12 @@ class Mailbox:
             self._tx_echo = plc.var(f"{path}.TxEcho")
         except KeyError:
             self._tx_echo = None
+        has_echo = self._tx_echo is not None
+        try:
+            self._rx_codec = FrameCodec.of(plc.var(f"{path}.Rx"), has_echo)
+            self._tx_codec = FrameCodec.of(plc.var(f"{path}.Tx"), has_echo)
+        except KeyError:        # a PLC that binds the members only: the accessors do it
+            self._rx_codec = self._tx_codec = None
 
     @property
     def has_echo(self) -> bool:
@@ -118,6 +181,10 @@ class Mailbox:
         if n > MAILBOX_FRAMES:
             lost, n = n - MAILBOX_FRAMES, MAILBOX_FRAMES
             self._rx_lost.value = (self._rx_lost.value + lost) & 0xFFFFFFFF
+        if self._rx_codec is not None:
+            self._rx_codec.write(frames[:n] if lost else frames, echoes)
+            self._rx_count.value = n
+            return lost
         rx = self._rx
         for i in range(n):
             slot = rx[i + 1] or self._bind_rx(i + 1)
@@ -156,6 +223,18 @@ class Mailbox:
             raise CoSimError(f"{self.path}.TxCount = {n}: outside 0..{MAILBOX_FRAMES} (Tx holds "
                              f"{MAILBOX_FRAMES} frames; a full Tx is counted in TxLost, not in TxCount)")
         frames = []
+        codec = self._tx_codec
+        if codec is not None:
+            for i in range(n):
+                can_id, dlc, rtr, data = codec.read(i)
+                if can_id > 0x7FF or dlc > 8:
+                    self._tx_count.value = 0
+                    raise CoSimError(f"{self.path}.Tx[{i + 1}]: Id {can_id:#x} Dlc {dlc} is not a CAN 2.0A frame "
+                                     f"(Id 0..16#7FF, Dlc 0..8)")
+                # checked just above: an 11-bit identifier, at most 8 bytes
+                frames.append(Frame(can_id, b"", True, dlc) if rtr else Frame.checked_by_caller(can_id, data[:dlc]))
+            self._tx_count.value = 0
+            return frames
         tx = self._tx
         for i in range(1, n + 1):
             slot = tx[i]

@@ -134,3 +134,24 @@ def test_remove_node_at_time():
     assert echo.count == 1 and "drive" not in bus.names
     with pytest.raises(KeyError, match="drive"):
         bus.node("drive")
+
+
+def test_a_node_removed_while_its_frame_goes_bus_off_leaves_the_others_queues_alone():
+    # the sender's last transmit error (bus-off) ends after its removal: the bus must not clear the queue head of the
+    # participant that took its place in the bus's lists (the frame of "later" waits behind the doomed node's
+    # retransmissions, which win arbitration with 0x100)
+    def bus_with(remove_at=None):
+        bus = SimBus()
+        bus.attach(ScriptedNode([(0, Frame(0x100, bytes(8)))]), "doomed")
+        bus.attach(ScriptedNode([(0, Frame(0x200, b"\x01"))]), "later")
+        bus.corrupt(match_id(0x100), count=31)               # 31 * 8 = 248: the 32nd error is bus-off
+        if remove_at is not None:
+            bus.remove_node("doomed", remove_at)
+        bus.run_until(50_000_000)
+        return bus
+
+    plain = bus_with()
+    assert [e.status for e in plain.trace] == ["error"] * 31 + ["ok", "ok"]
+    bus = bus_with(plain.trace[31].start_ns + 10 * BIT)      # while its 32nd attempt is on the bus
+    assert [(e.sender, e.status) for e in bus.trace] == [("doomed", "error")] * 32 + [("later", "ok")]
+

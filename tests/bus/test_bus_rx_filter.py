@@ -42,6 +42,29 @@ def test_a_node_is_offered_only_what_its_filter_accepts_and_the_filter_is_read_a
     assert [e.frame.can_id for e in bus.trace] == [0x300, 0x200, 0x100, 0x300, 0x200]   # the bus is the bus
 
 
+def test_a_filter_changed_in_place_is_read_at_each_frame():
+    # the bus keeps the receivers of each CAN-ID while every filter is a frozenset; a set the node changes in place
+    # (the same object) is looked at anew for every frame
+    class InPlace(Recorder):
+        def on_frame(self, frame, t_ns):
+            self.seen.append(frame.can_id)
+            if frame.can_id == 0x100:
+                self.rx_filter.add(0x300)
+            return []
+
+    bus = SimBus()
+    node = InPlace(rx_filter={0x100})
+    fixed = Recorder(rx_filter=frozenset({0x300}))
+    bus.attach(node, "node")
+    bus.attach(fixed, "fixed")
+    plc = bus.endpoint("plc")
+    for k, cid in enumerate((0x300, 0x100, 0x300, 0x200, 0x300)):
+        plc.send(Frame(cid, bytes([k])), k * 1_000_000)
+    bus.run_until(10_000_000)
+    assert node.seen == [0x100, 0x300, 0x300]
+    assert fixed.seen == [0x300, 0x300, 0x300]
+
+
 def test_the_bus_can_offer_every_frame_to_every_node():
     bus = SimBus(rx_filters=False)
     node = Recorder(rx_filter=frozenset({0x100}))

@@ -5,6 +5,7 @@ import pytest
 from linmot_st.bus import Frame, SimBus, match_id
 from linmot_st.bus.bits import bus_bits
 from linmot_st.bus.nodes import EchoNode, ScriptedNode
+from linmot_st.bus.stats import busy_per_window
 from linmot_st.bus.trace import read_trace
 
 BIT = 2000
@@ -69,3 +70,21 @@ def test_stats_busy_load_and_frames_per_sender():
     part = bus.stats(0, first.end_ns - 10_000)
     assert part.busy_ns == first.end_ns - 10_000 and part.frames == 1
     assert bus.stats(first.end_ns + 3 * BIT, first.end_ns + 50_000).busy_ns == 0
+
+
+@pytest.mark.parametrize("window_ns", [100_000, 333_333, 1_000_000, 20_000_000])
+def test_busy_per_window_is_bus_stats_of_each_window(window_ns):
+    # the one sweep the motion job's busiest 100 ms uses against the plain bus_stats per window: windows that cut
+    # frames (and their interframe space), an error frame, windows with nothing, a last stub, a start before t0
+    bus = traffic()
+    plc = bus.node("plc")
+    for k in range(40):
+        plc.send(Frame(0x200 + k % 7, bytes([k] * (k % 9))), 6_000_000 + k * 137_000)
+    bus.run_until(12_000_000)
+    for t0, t1 in ((0, 12_000_000), (1_234_567, 9_876_543), (5_000_000, 5_000_001)):
+        windows = busy_per_window(bus.trace, BIT, t0, t1, window_ns)
+        assert windows[0][0] == t0 and windows[-1][1] == t1
+        assert all(a[1] == b[0] for a, b in zip(windows, windows[1:]))
+        assert [w[2] for w in windows] == [bus.stats(t, e).busy_ns for t, e, _ in windows]
+    assert sum(w[2] for w in busy_per_window(bus.trace, BIT, 0, 12_000_000, window_ns)) == bus.stats().busy_ns
+    assert busy_per_window(bus.trace, BIT, 5, 5, window_ns) == []

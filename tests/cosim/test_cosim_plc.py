@@ -8,7 +8,7 @@ import pytest
 
 from linmot_st.bus import Frame, NodeServer, SimBus, open_bus
 from linmot_st.bus.nodes import ScriptedNode
-from linmot_st.cosim import CoSim, RealTimeCoSim
+from linmot_st.cosim import CoSim, CoSimError, Mailbox, RealTimeCoSim
 from linmot_st_bench.bus import ECHO_ST
 from repo_paths import REPO
 
@@ -53,6 +53,50 @@ def test_echo_program_on_the_simulated_bus(echo_build):
     assert [e.start_ns for e in echoes] == [(k + 1) * 1_000_000 for k in range(4)]
     assert plc["INST0.SEEN"] == 4 and plc[f"{MB}.TXCOUNT"] == 0
     assert sim.frames_received == 4 and sim.frames_sent == 4
+
+
+def test_frame_codec_writes_and_reads_what_the_member_accessors_do(echo_build):
+    # the mailbox packs a frame in one struct call where Rx/Tx have T_CanFrame's layout (FrameCodec): the same bytes
+    # as the member-by-member accessors (the path of any other mailbox type), both ways, on both backends
+    import random
+
+    from linmot_st.plc import Plc
+    plc = Plc(echo_build)
+    fast = Mailbox(plc, MB)
+    plain = Mailbox(plc, MB)
+    plain._rx_codec = plain._tx_codec = None
+    assert fast._rx_codec is not None and fast._tx_codec is not None
+    rng = random.Random(24)
+    frames = [Frame(rng.randrange(0x800), rtr=True, rtr_dlc=rng.randrange(9)) if rng.random() < 0.2
+              else Frame(rng.randrange(0x800), bytes(rng.randrange(256) for _ in range(rng.randrange(9))))
+              for _ in range(40)]
+    echoes = [rng.random() < 0.5 for _ in frames]
+    rx = plc.var(f"{MB}.Rx")
+    before = bytes(rng.randrange(256) for _ in range(rx.nbytes))     # what a previous scan left
+    for mailbox in (fast, plain):
+        rx.write_bytes(before)
+        plc[f"{MB}.RXLOST"] = 0
+        assert mailbox.write_rx(frames, echoes) == 8
+        written = (rx.read_bytes(), plc[f"{MB}.RXCOUNT"], plc[f"{MB}.RXLOST"])
+        if mailbox is fast:
+            first = written
+    assert written == first and written[1:] == (32, 8)
+    tx = plc.var(f"{MB}.Tx")
+    for _ in range(5):
+        tx.write_bytes(bytes(rng.randrange(256) for _ in range(tx.nbytes)))
+        for i in range(1, 33):      # valid identifiers and lengths, the rest of each element left random
+            plc[f"{MB}.Tx[{i}].Id"], plc[f"{MB}.Tx[{i}].Dlc"] = rng.randrange(0x800), rng.randrange(9)
+        n = rng.randrange(33)
+        plc[f"{MB}.TXCOUNT"] = n
+        got = fast.take_tx()
+        plc[f"{MB}.TXCOUNT"] = n
+        assert got == plain.take_tx() and len(got) == n
+    plc[f"{MB}.Tx[2].Dlc"] = 9
+    for mailbox in (fast, plain):
+        plc[f"{MB}.TXCOUNT"] = 3
+        with pytest.raises(CoSimError, match=r"Tx\[2\]: Id .* Dlc 9"):
+            mailbox.take_tx()
+        assert plc[f"{MB}.TXCOUNT"] == 0
 
 
 def test_rx_overflow_and_tx_lost_with_a_real_plc(echo_build):

@@ -294,6 +294,20 @@ def test_instances_are_independent(built):
     assert (a.time_ns, b.time_ns) == (100_000_000, 30_000_000)
 
 
+def test_instances_of_one_build_share_its_types_and_not_its_memory(built):
+    # the second Plc of a build takes the resolved types of the first (plc/layout.py: no ctypes class made twice);
+    # its variables are its own all the same, and a manifest with other declarations gets types of its own
+    from linmot_st.plc import layout
+
+    a, b = Plc(built), Plc(built)
+    assert a.layout.resolve("MAIN") is b.layout.resolve("MAIN")
+    assert a.var("INST0.COUNT").address != b.var("INST0.COUNT").address
+    manifest = json.loads(json.dumps(a.manifest))
+    manifest["types"]["T_EXTRA"] = {"kind": "struct", "fields": [{"name": "X", "type": "INT"}]}
+    assert layout.Layout(manifest).resolve("MAIN") is not a.layout.resolve("MAIN")
+    assert len(layout._shared) <= layout.SHARED_LAYOUTS
+
+
 def test_time_can_be_set(plc):
     plc.time_ns = 5_000_000_000
     plc.step(1)

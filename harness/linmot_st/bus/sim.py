@@ -38,6 +38,9 @@ from .trace import write_trace
 STANDARD_BITRATES = (125_000, 250_000, 500_000, 1_000_000)
 _new_tuple = tuple.__new__
 TEC_BUS_OFF = 256   # transmit error counter: +8 per transmit error, -1 per success (CAN 2.0 fault confinement)
+# "no timer" / "empty queue" in the bus's per-participant lists of timers and queue heads: later than any time, so
+# that the earliest of each is one min() in C rather than a loop over the participants per event
+NEVER = 1 << 256
 
 
 class TraceEntry(NamedTuple):
@@ -51,7 +54,7 @@ class TraceEntry(NamedTuple):
 class _Part:
     """A participant's state on the bus."""
 
-    __slots__ = ("name", "node", "latency", "queue", "timer", "order", "tec", "bus_off", "sent", "discarded",
+    __slots__ = ("name", "node", "latency", "queue", "index", "order", "tec", "bus_off", "sent", "discarded",
                  "has_timer", "observe", "hold_until", "by_priority", "accepts", "filtered", "overwritten")
 
     def __init__(self, name: str, node: Any, latency: int, order: int) -> None:
@@ -61,7 +64,7 @@ class _Part:
         # bus time after each run_until
         self.observe = getattr(node, "observe", None)
         self.queue: list[tuple[int, int, Frame]] = []    # (ready_ns, seq, frame), sorted
-        self.timer: int | None = None
+        self.index = 0           # its place in SimBus._parts, and so in SimBus._timers and SimBus._heads
         self.tec = 0
         self.bus_off = False
         self.sent = 0
@@ -117,6 +120,17 @@ class SimBus:
         self.faults: list[Fault] = []
         self._parts: list[_Part] = []
         self._parts_by_name: dict[str, _Part] = {}
+        # per participant, in the order of _parts, then a NEVER that is no one's: its next timer and the ready time
+        # of its queue's head (NEVER: none), kept current wherever either changes; the event loop takes the earliest
+        # of each with min() (the first of equal times: the participant attached first, as a loop over them would)
+        self._timers: list[int] = [NEVER]
+        self._heads: list[int] = [NEVER]
+        self._observers: list[Callable[[int], Any]] = []     # the nodes' observe(), in attach order
+        # CAN-ID -> the participants whose acceptance filter takes it, in attach order: made at a frame of that ID,
+        # dropped when any filter changes (a node's rx_filter read after a call into it is another object); kept
+        # only while every filter is None or a frozenset (a set the node could change in place is looked at anew)
+        self._receivers: dict[int, tuple[_Part, ...]] = {}
+        self._receivers_kept = True
         self._order = 0
         self._seq = 0
         self._tx: list | None = None     # in flight: [part, frame, start, end, status, retransmit]
@@ -142,8 +156,13 @@ class SimBus:
         part = _Part(name, node, latency_ns, self._order)
         if not self._rx_filters:
             part.filtered, part.accepts = False, None
+        part.index = len(self._parts)
         self._parts.append(part)
+        self._timers.insert(part.index, NEVER)
+        self._heads.insert(part.index, NEVER)
         self._parts_by_name[name] = part
+        self._observers = [p.observe for p in self._parts if p.observe is not None]
+        self._filters_changed()
         self._read_timer(part)
         return name
 
@@ -191,6 +210,7 @@ class SimBus:
                 return   # removed meanwhile
             self._abort_tx_of(part, t)
             part.queue.clear()
+            self._heads[part.index] = NEVER
             part.hold_until = 0
             part.tec, part.bus_off = 0, False
             if hook is not None:
@@ -208,6 +228,11 @@ class SimBus:
     def _remove(self, part: _Part, t: int) -> None:
         self._abort_tx_of(part, t)
         self._parts.remove(part)
+        del self._timers[part.index], self._heads[part.index]
+        for i, p in enumerate(self._parts):
+            p.index = i
+        self._observers = [p.observe for p in self._parts if p.observe is not None]
+        self._filters_changed()
         del self._parts_by_name[part.name]
         part.queue.clear()
 
@@ -258,9 +283,16 @@ class SimBus:
     def _read_timer(self, part: _Part) -> None:
         t = part.node.next_timer_ns()
         now = self.now                      # max(int(t), now) without the builtin's call: after every timer
-        part.timer = None if t is None else (int(t) if t > now else now)
+        self._timers[part.index] = NEVER if t is None else (int(t) if t > now else now)
         if part.filtered:
-            part.accepts = part.node.rx_filter
+            accepts = part.node.rx_filter
+            if accepts is not part.accepts:
+                part.accepts = accepts
+                self._filters_changed()
+
+    def _filters_changed(self) -> None:
+        self._receivers.clear()
+        self._receivers_kept = all(p.accepts is None or type(p.accepts) is frozenset for p in self._parts)
 
     def _submit(self, part: _Part, ready: int, frame: Frame) -> None:
         if ready < self.now:
@@ -296,20 +328,23 @@ class SimBus:
             q.append((ready, self._seq, frame))
         else:
             insort(q, (ready, self._seq, frame))
+        self._heads[part.index] = q[0][0]
 
     def next_event_ns(self, refresh: bool = False) -> int | None:
         """Time of the next event (frame end, action, timer, transmission start), None if there is none.
         `refresh` reads every node's timer first, as run_until does (a node changed from outside)."""
         if refresh:
             self._refresh_timers()
-        times = [p.timer for p in self._parts if p.timer is not None]
+        t = min(self._timers)
         if self._tx is not None:
-            times.append(self._tx[3])
-        elif any(p.queue for p in self._parts):
-            times.append(max(self._idle_at, min(p.queue[0][0] for p in self._parts if p.queue)))
+            t = min(t, self._tx[3])
+        else:
+            ready = min(self._heads)
+            if ready != NEVER:
+                t = min(t, max(self._idle_at, ready))
         if self._actions:
-            times.append(self._actions[0][0])
-        return min(times) if times else None
+            t = min(t, self._actions[0][0])
+        return None if t == NEVER else t
 
     def run_until(self, t_end: int, refresh: bool = True) -> None:
         """Advance virtual time to t_end, processing every event up to it (see the module doc). `refresh`
@@ -317,8 +352,7 @@ class SimBus:
         and changed no node since."""
         if t_end < self.now:
             raise ValueError(f"run_until({t_end}): bus time is already {self.now} ns")
-        parts = self._parts
-        actions = self._actions
+        parts, actions, timers, heads = self._parts, self._actions, self._timers, self._heads
         if refresh:
             self._refresh_timers()
         while True:
@@ -330,23 +364,15 @@ class SimBus:
                 t_next, kind = t_end + 1, -1
             if actions and actions[0][0] < t_next:
                 t_next, kind = actions[0][0], 1
-            timer_part = None
-            ready = None
-            idle = tx is None
-            for p in parts:                       # one pass: the earliest timer, and the earliest queue head
-                pt = p.timer
-                if pt is not None and pt < t_next:
-                    t_next, kind, timer_part = pt, 2, p
-                if idle:
-                    q = p.queue
-                    if q:
-                        r = q[0][0]
-                        if ready is None or r < ready:
-                            ready = r
-            if ready is not None:
-                t_arb = ready if ready > self._idle_at else self._idle_at
-                if t_arb < t_next and t_arb < t_end:
-                    t_next, kind = t_arb, 3
+            pt = min(timers)                      # the earliest timer (NEVER: none)
+            if pt < t_next:
+                t_next, kind = pt, 2
+            if tx is None:
+                ready = min(heads)                # the earliest queue head (NEVER: every queue is empty)
+                if ready != NEVER:
+                    t_arb = ready if ready > self._idle_at else self._idle_at
+                    if t_arb < t_next and t_arb < t_end:
+                        t_next, kind = t_arb, 3
             if t_next > t_end:              # also when nothing is pending (kind -1: t_next is t_end + 1)
                 break
             self.now = t_next
@@ -355,30 +381,34 @@ class SimBus:
             elif kind == 1:
                 heapq.heappop(actions)[2](t_next)
             elif kind == 2:
-                self._fire_timer(timer_part, t_next)
+                self._fire_timer(parts[timers.index(t_next)], t_next)    # the first part whose timer it is
             else:
                 self._arbitrate(t_next)
         self.now = t_end
-        for p in parts:
-            if p.observe is not None:
-                p.observe(t_end)
+        for observe in self._observers:
+            observe(t_end)
 
     def _refresh_timers(self) -> None:
         # A node may have been changed from outside since the bus last called it (attach, then
         # power_on(0)): read every timer again, so that the order of such calls does not matter.
         now = self.now
+        timers = self._timers
         for p in self._parts:
             if p.has_timer:
                 t = p.node.next_timer_ns()
-                p.timer = None if t is None else (t if t > now else now)
+                timers[p.index] = NEVER if t is None else (t if t > now else now)
                 if p.filtered:
-                    p.accepts = p.node.rx_filter
+                    accepts = p.node.rx_filter
+                    if accepts is not p.accepts:
+                        p.accepts = accepts
+                        self._filters_changed()
 
     def _fire_timer(self, part: _Part, t: int) -> None:
         self._queue_all(part, t, part.node.on_timer(t))
         self._read_timer(part)
-        if part.timer is not None and part.timer <= t:
-            raise RuntimeError(f"{part.name}: next_timer_ns() is still {part.timer} after on_timer({t}); "
+        timer = self._timers[part.index]
+        if timer <= t:
+            raise RuntimeError(f"{part.name}: next_timer_ns() is still {timer} after on_timer({t}); "
                                f"a node must move its timer forward when it fires")
 
     @staticmethod
@@ -403,27 +433,30 @@ class SimBus:
         q[:n] = kept
 
     def _arbitrate(self, t: int) -> None:
+        parts, heads = self._parts, self._heads
         while True:
             winner, best, at = None, 0x800, 0
-            for p in self._parts:
-                q = p.queue
-                if q:
-                    head = q[0]
-                    if head[0] <= t:
-                        k = 0
-                        if p.by_priority:       # its ready frame of highest priority (the queue is by ready time)
-                            if len(q) > 1:
-                                self._overwrite(p, t)
-                            for i in range(1, len(q)):
-                                if q[i][0] > t:
-                                    break
-                                if q[i][2].can_id < q[k][2].can_id:
-                                    k = i
-                        if q[k][2].can_id < best:
-                            winner, best, at = p, q[k][2].can_id, k
+            for n, head in enumerate(heads):    # the participants whose queue's head is ready (NEVER: empty)
+                if head <= t:
+                    p = parts[n]
+                    q = p.queue
+                    k = 0
+                    if p.by_priority:       # its ready frame of highest priority (the queue is by ready time)
+                        if len(q) > 1:
+                            self._overwrite(p, t)
+                            heads[n] = q[0][0]
+                        for i in range(1, len(q)):
+                            if q[i][0] > t:
+                                break
+                            if q[i][2].can_id < q[k][2].can_id:
+                                k = i
+                    if q[k][2].can_id < best:
+                        winner, best, at = p, q[k][2].can_id, k
             if winner is None:
                 return
-            frame = winner.queue.pop(at)[2]
+            q = winner.queue
+            frame = q.pop(at)[2]
+            self._heads[winner.index] = q[0][0] if q else NEVER
             status = "ok"
             start_faults = self._stage["start"]
             if start_faults:
@@ -461,6 +494,8 @@ class SimBus:
                 part.bus_off = True
                 part.discarded += len(part.queue) + 1
                 part.queue.clear()
+                if self._parts_by_name.get(part.name) is part:     # (a removed sender's index is another's now)
+                    self._heads[part.index] = NEVER
             elif retransmit and self._parts_by_name.get(part.name) is part:
                 self._requeue_first(part, end, frame)
             return
@@ -480,19 +515,27 @@ class SimBus:
         self.trace.append(_new_tuple(TraceEntry, (start, end, part.name, frame, status)))   # no Python __new__
         now = self.now
         cid = frame.can_id
-        for p in self._parts:
+        timers = self._timers
+        # the receivers: every other participant whose acceptance filter takes the frame (a node it filters out is
+        # untouched), as of the start of the delivery (a node's own call can change only its own filter)
+        receivers = self._receivers.get(cid)
+        if receivers is None:
+            receivers = tuple(p for p in self._parts if p.accepts is None or cid in p.accepts)
+            if self._receivers_kept:
+                self._receivers[cid] = receivers
+        for p in receivers:
             if p is not part:
-                accepts = p.accepts
-                if accepts is not None and cid not in accepts:
-                    continue                      # its acceptance filter: the node's state is untouched
                 node = p.node
                 out = node.on_frame(frame, end)
                 if out:
                     self._queue_all(p, end, out)
                 t = node.next_timer_ns()          # _read_timer, inlined: once per receiver and frame
-                p.timer = None if t is None else (int(t) if t > now else now)
+                timers[p.index] = NEVER if t is None else (int(t) if t > now else now)
                 if p.filtered:
-                    p.accepts = node.rx_filter
+                    accepts = node.rx_filter
+                    if accepts is not p.accepts:
+                        p.accepts = accepts
+                        self._filters_changed()
         if duplicate and self._parts_by_name.get(part.name) is part:
             self._requeue_first(part, end, sent)
 
@@ -502,6 +545,7 @@ class SimBus:
         ready = min(t, q[0][0]) if q else t   # keeps the queue sorted; it is due at once either way
         self._seq += 1
         q.insert(0, (ready, self._seq, frame))
+        self._heads[part.index] = ready
 
     # -- results -------------------------------------------------------------------------------
     def stats(self, t0_ns: int = 0, t1_ns: int | None = None):

@@ -8,6 +8,8 @@ VAR_EXTERNAL of a function block type). The layout of the elementary types is Ma
 from __future__ import annotations
 
 import ctypes
+import json
+from collections import OrderedDict
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -66,6 +68,13 @@ class TypeInfo:
         return ctypes.sizeof(self.ctype)
 
 
+# The resolved types of the manifests loaded last, by their type declarations: a second Plc of the same build (each
+# test, each run of a job) finds its ctypes classes made (plc_project's: ~45 ms to build). TypeInfo is not changed
+# once built, so Layouts of equal declarations share it; the oldest entry goes beyond SHARED_LAYOUTS.
+SHARED_LAYOUTS = 16
+_shared: OrderedDict[str, dict[str, TypeInfo]] = OrderedDict()
+
+
 class Layout:
     """Every type of a manifest as ctypes, built on demand and memoised by reference."""
 
@@ -73,7 +82,12 @@ class Layout:
         if manifest.get("schema") != 1:
             raise LayoutError(f"manifest schema {manifest.get('schema')!r} is not supported (expected 1)")
         self.types: dict[str, dict] = {k.upper(): v for k, v in manifest.get("types", {}).items()}
-        self._resolved: dict[str, TypeInfo] = {}
+        key = json.dumps(self.types, sort_keys=True)
+        resolved = _shared.pop(key, None)
+        self._resolved: dict[str, TypeInfo] = {} if resolved is None else resolved
+        _shared[key] = self._resolved             # the newest last
+        while len(_shared) > SHARED_LAYOUTS:
+            _shared.popitem(last=False)
         self._building: set[str] = set()
 
     def resolve(self, ref: str) -> TypeInfo:

@@ -10,13 +10,13 @@ import ctypes
 from typing import Any
 
 from .access import FORCE_FLAG, Target, check_integer, enum_name, read_value, write_value
-from .layout import INTEGER_RANGES
+from .layout import INTEGER_RANGES, TypeInfo
 
 
 class Var:
     """A variable of a loaded PLC. `value` reads and writes it; `force`/`unforce` pin it."""
 
-    __slots__ = ("path", "type", "_addr", "_info", "_flags", "_owner")
+    __slots__ = ("path", "type", "_addr", "_info", "_flags", "_owner", "_view")
 
     def __init__(self, target: Target, owner: Any = None):
         self.path = target.path
@@ -25,6 +25,7 @@ class Var:
         self._info = target.info
         self._owner = owner   # keeps the library (and so the memory) alive
         self._flags = None
+        self._view: memoryview | None = None
         if target.wrapper_addr is not None:
             offset = target.wrapper_info.ctype.flags.offset
             self._flags = ctypes.c_uint8.from_address(target.wrapper_addr + offset)
@@ -62,15 +63,27 @@ class Var:
     def nbytes(self) -> int:
         return self._info.size
 
+    @property
+    def info(self) -> TypeInfo:
+        """The value's resolved type (its C layout: the offsets of its members, its elements' size)."""
+        return self._info
+
+    def view(self) -> memoryview:
+        """The value's bytes in the PLC's memory as a writable memoryview (made once): struct.pack_into and
+        unpack_from work on it in one call, where a ctypes memmove or string_at costs a foreign call each."""
+        if self._view is None:
+            self._view = memoryview((ctypes.c_char * self._info.size).from_address(self._addr)).cast("B")
+        return self._view
+
     def read_bytes(self) -> bytes:
         """The value's raw C bytes (an ARRAY OF BYTE is its bytes, in index order)."""
-        return ctypes.string_at(self._addr, self._info.size)
+        return (self._view or self.view()).tobytes()
 
     def write_bytes(self, data: bytes) -> None:
         """Overwrite the value's leading bytes with `data` (at most its size)."""
         if len(data) > self._info.size:
             raise ValueError(f"{self.path}: {len(data)} bytes do not fit its {self._info.size}")
-        ctypes.memmove(self._addr, data, len(data))
+        (self._view or self.view())[:len(data)] = data
 
     def __repr__(self) -> str:
         return f"<Var {self.path}: {self.type} = {self.value!r}>"

@@ -22,12 +22,14 @@ from __future__ import annotations
 import json
 from bisect import bisect_left
 from dataclasses import asdict, dataclass, replace
+from operator import attrgetter
 from pathlib import Path
 
 from linmot_st.bus.bits import max_bus_bits
-from linmot_st.bus.stats import bus_stats
+from linmot_st.bus.stats import bus_stats, busy_per_window
 
 EVENT, SYNC = "event", "sync"
+_start = attrgetter("start_ns")           # a trace entry's start: the key the trace is sorted by
 VECTORS = Path(__file__).resolve().parents[4] / "tests" / "vectors" / "pdo_budget.json"
 
 
@@ -206,16 +208,13 @@ def measured_load(trace, bit_ns: int, t0_ns: int, t1_ns: int, window_ns: int = 1
     window of window_ns (a planned load is a rate; a short burst is what overloads a bus)."""
     if t1_ns <= t0_ns:
         return 0.0, 0.0
-    starts = [e.start_ns for e in trace]
-    lo = bisect_left(starts, t0_ns - window_ns)
-    part = trace[lo:bisect_left(starts, t1_ns)]
+    lo = bisect_left(trace, t0_ns - window_ns, key=_start)
+    part = trace[lo:bisect_left(trace, t1_ns, lo=lo, key=_start)]
     mean = bus_stats(part, bit_ns, t0_ns, t1_ns).load
-    peak, t = 0.0, t0_ns
-    while t < t1_ns:
-        end = min(t + window_ns, t1_ns)
+    peak = 0.0
+    for t, end, busy in busy_per_window(part, bit_ns, t0_ns, t1_ns, window_ns):
         if end - t >= window_ns // 2:             # a last stub of a window says little
-            peak = max(peak, bus_stats(part, bit_ns, t, end).load)
-        t = end
+            peak = max(peak, busy / (end - t))    # BusStats.load of the window
     return mean, peak
 
 

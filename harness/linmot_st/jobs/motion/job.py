@@ -25,6 +25,7 @@ from .plan import CAM_TURN_MS, INPUT_EDGE_DELAY_MS, INPUT_PULSE_MS, MAX_STEPS, P
 MS = 1_000_000
 TRIGGER_MODE_DIRECT = 1         # 170Ch: the trigger input's edges as they come ([MC] 7.2.2)
 INPUT_OF_STEP = {"trigger": "X4.6", "probe": "X4.5"}     # the emulated input the job toggles in the step
+TOGGLED = frozenset((*INPUT_OF_STEP, "cam"))               # the steps in which the job's hand moves the rig
 ENCODER_SOURCE_X10 = 1          # 172Ah: the master encoder on X10 ([MC] 7.3; the default 0 has none)
 
 
@@ -102,40 +103,49 @@ class MotionSampler(IdlePredicate):
                            probed=v(f"{INSTANCE}.A{k}.MOT.PROBED"))
                       for k in range(1, len(node_ids) + 1)]
         super().__init__(plc, [vs[n] for vs in self._vars for n in ("step", "done", "error", "armed")])
+        # the axes still moving, each with the accessors every call reads (a finished axis records nothing more)
+        self._open = [(ax, vs, (vs["step"], vs["done"], vs["error"])) for ax, vs in zip(self.axes, self._vars)]
 
     def __call__(self) -> bool:
-        plc = self.plc
         self.changes_nodes = False      # until _toggle moves a drive's input or conveyor
         if self.begin_call():
-            t = plc.time_ns            # the end of the scan that just ran
-            for ax, vs in zip(self.axes, self._vars):
-                if ax.done or ax.error:
-                    continue
-                k = vs["step"].value
+            t = self.plc.time_ns       # the end of the scan that just ran
+            n_steps = len(self.plan.steps)
+            finished = False
+            for ax, vs, (step, done, error) in self._open:
+                k = step.value
                 cur = ax.steps[-1] if ax.steps else None
-                if k >= 1 and (cur is None or cur.index != k) and k <= len(self.plan.steps):
-                    off = self._offset(ax.node_id, t - plc.tick_ns)
-                    if cur is not None:
-                        cur.t1_ns, cur.scan1, cur.ok, cur.off1_ns = t - plc.tick_ns, self.scans - 1, True, off
-                        if cur.kind == "probe":       # Probed is set in the scan the step ends
-                            cur.probed_mm = vs["probed"].value
-                        if self.progress:
-                            self.progress.step_done(ax, cur)
-                    s = self.plan.steps[k - 1]
-                    ax.steps.append(StepRecord(k, s.kind, s.label, t - plc.tick_ns, self.scans - 1, off0_ns=off))
-                cur = ax.steps[-1] if ax.steps else None
-                if cur is not None and (cur.kind in INPUT_OF_STEP or cur.kind == "cam") and not cur.t1_ns:
+                if k >= 1 and (cur is None or cur.index != k) and k <= n_steps:
+                    cur = self._next_step(ax, vs, cur, k, t)
+                if cur is not None and cur.kind in TOGGLED and not cur.t1_ns:
                     self._toggle(ax, cur, vs, t)
-                if vs["done"].value or vs["error"].value:
-                    cur = ax.steps[-1] if ax.steps else None
-                    ax.done, ax.error = bool(vs["done"].value), bool(vs["error"].value)
+                is_done, is_error = done.value, error.value
+                if is_done or is_error:
+                    ax.done, ax.error = is_done, is_error
+                    finished = True
                     if cur is not None and not cur.t1_ns:
                         cur.t1_ns, cur.scan1, cur.ok = t, self.scans, ax.done
                         cur.off1_ns = self._offset(ax.node_id, t)
                         if self.progress:
                             self.progress.step_done(ax, cur)
+            if finished:
+                self._open = [o for o in self._open if not (o[0].done or o[0].error)]
         self.end_call()
-        return all(a.done or a.error for a in self.axes)
+        return not self._open
+
+    def _next_step(self, ax: AxisMotion, vs: dict, cur: StepRecord | None, k: int, t: int) -> StepRecord:
+        """The PLC moved the axis on to step k in the scan that just ran (ending at t): the step before ends there."""
+        t_scan = t - self.plc.tick_ns
+        off = self._offset(ax.node_id, t_scan)
+        if cur is not None:
+            cur.t1_ns, cur.scan1, cur.ok, cur.off1_ns = t_scan, self.scans - 1, True, off
+            if cur.kind == "probe":       # Probed is set in the scan the step ends
+                cur.probed_mm = vs["probed"].value
+            if self.progress:
+                self.progress.step_done(ax, cur)
+        s = self.plan.steps[k - 1]
+        ax.steps.append(StepRecord(k, s.kind, s.label, t_scan, self.scans - 1, off0_ns=off))
+        return ax.steps[-1]
 
     def _toggle(self, ax: AxisMotion, rec: StepRecord, vs: dict, t: int) -> None:
         """The job's hand on the rig: once the PLC armed the step (Armed), the step's input pulses on the
@@ -228,8 +238,8 @@ def motion_phase(plan: Plan, timeout_s: float, progress=None, inhibit_100us: int
             ends = [r.t1_ns for ax in sampler.axes for r in ax.steps if r.kind == "setup" and r.t1_ns]
             result.bus_load = measured_load(bus.trace, bus.bit_ns, max(ends, default=result.t0_ns), result.t1_ns)
         for ax in sampler.axes:
-            m = plc[f"{INSTANCE}.A{ax.axis}.MOT"]
-            ax.error_id, ax.drive_error, ax.fail_step = m["ERRORID"], m["DRIVEERROR"], m["FAILSTEP"]
+            mot = f"{INSTANCE}.A{ax.axis}.MOT"      # three members, not the whole FB read into a dict
+            ax.error_id, ax.drive_error, ax.fail_step = plc[f"{mot}.ERRORID"], plc[f"{mot}.DRIVEERROR"], plc[f"{mot}.FAILSTEP"]
             if ax.error and ax.steps:
                 ax.steps[-1].ok = False
                 ax.steps[-1].error_id, ax.steps[-1].drive_error = ax.error_id, ax.drive_error
