@@ -47,8 +47,29 @@ def _script(sync: bool, inhibit_100us: int = 0) -> list[tuple[int, Frame]]:
     return sorted(s, key=lambda x: x[0])
 
 
-def _run(quiet: bool, sync: bool, hold_ns: int, inhibit_100us: int = 0):
-    profile = load_profile().with_defaults({0x1194: 2, 0x146F: 250 * MM, 0x146E: -10 * MM})
+def _special_script(sync: bool, inhibit_100us: int = 0) -> list[tuple[int, Frame]]:
+    """The special states by control word: homing by a negative search onto the mechanical stop (its phase 2 back
+    to the initial position), jog plus and minus, go to initial position, clearance check (left in its phase 2),
+    go to position, a jog left while it runs."""
+    cw = lambda w: Frame(0x201, struct.pack("<H", w))                               # noqa: E731
+    s = [(f_t, f) for f_t, f in _script(sync, inhibit_100us) if f_t <= 70 * MS and f.can_id != 0x080]
+    t = 100 * MS
+    for bit, ms in ((0x0800, 900), (0, 50), (0x0100, 400), (0, 50), (0x0200, 300), (0, 50), (0x2000, 600), (0, 50),
+                    (0x1000, 900), (0, 50), (0x0040, 700), (0, 50), (0x0100, 100), (0, 100)):
+        s.append((t, cw(0x003F | bit)))
+        t += ms * MS
+    if sync:
+        s += [(k * 4 * MS, Frame(0x080, b"")) for k in range(15, 1300)]
+    return sorted(s, key=lambda x: x[0])
+
+
+# homing mode 3 (mechanical stop, negative search), jog increment 20 mm, the special states' positions
+SPECIAL_PROFILE = {0x1500: 3, 0x14B1: 20 * MM, 0x1502: 50 * MM, 0x1510: 30 * MM, 0x1520: 10 * MM, 0x1521: 40 * MM}
+
+
+def _run(quiet: bool, sync: bool, hold_ns: int, inhibit_100us: int = 0, special: bool = False):
+    profile = load_profile().with_defaults({0x1194: 2, 0x146F: 250 * MM, 0x146E: -10 * MM,
+                                            **(SPECIAL_PROFILE if special else {})})
     drive = E1100Drive(1, profile, timings=DriveTimings.fast(),
                        motion=MotionSettings(quiet_cycles=quiet, in_target_hold_ns=hold_ns))
     generic = []                               # the cycles that ran through the generic path
@@ -67,9 +88,9 @@ def _run(quiet: bool, sync: bool, hold_ns: int, inhibit_100us: int = 0):
     drive.on_timer = woken
     bus = SimBus(1_000_000)
     bus.attach(drive, "drive")
-    bus.attach(ScriptedNode(_script(sync, inhibit_100us)), "master")
+    bus.attach(ScriptedNode((_special_script if special else _script)(sync, inhibit_100us)), "master")
     drive.power_on(0)
-    for k in range(1, 40):                     # observed now and then, as a test would (no effect on either)
+    for k in range(1, 60 if special else 40):  # observed now and then, as a test would (no effect on either)
         bus.run_until(k * 100 * MS)
     trace = [(e.start_ns, e.frame.can_id, bytes(e.frame.data)) for e in bus.trace]
     drive.generic_cycles, drive.wakes = len(generic), len(wakes)
@@ -108,3 +129,19 @@ def test_quiet_cycles_ahead_while_the_event_pdo_waits_for_its_inhibit_time(inhib
     # about two wakes per inhibit time while moving (its end, the next cycle) instead of one per 1 ms cycle
     _, _, every_cycle = _run(True, False, 0)                                # no inhibit: a wake every cycle
     assert drive.wakes < wakes_share * every_cycle.wakes, (drive.wakes, every_cycle.wakes)
+
+
+@pytest.mark.parametrize("sync, inhibit_100us", [(False, 0), (True, 0), (False, 35)])
+def test_special_states_quiet_cycles_give_the_same_frames_and_trajectory(sync, inhibit_100us):
+    """The special states' cycles are quiet while their plan runs (the homing search while the following error
+    stays below the stop error): the same frames and trajectory as every cycle one by one, through the homing
+    search onto the stop, both jogs, go to initial position, both phases of the clearance check, go to position."""
+    ref_trace, ref_samples, ref = _run(False, sync, 0, inhibit_100us, special=True)
+    trace, samples, drive = _run(True, sync, 0, inhibit_100us, special=True)
+    assert len(trace) == len(ref_trace) and trace == ref_trace
+    assert len(samples) == len(ref_samples) and samples == ref_samples
+    assert drive.errlog.entries == ref.errlog.entries == [] and drive.mc.homed
+    seen = {(s.state_var >> 8, s.state_var & 0xFF) for s in samples}
+    assert {(9, 1), (9, 2), (9, 15), (16, 1), (16, 15), (17, 1), (17, 15), (11, 15), (10, 1), (10, 2), (15, 1),
+            (15, 15)} <= seen                                          # every phase ran
+    assert ref.generic_cycles > 2500 and drive.generic_cycles < ref.generic_cycles / 50

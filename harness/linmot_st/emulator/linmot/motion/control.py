@@ -255,7 +255,13 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
     def observe(self, t: int) -> None:
         """Bring the inspectable state to time t (cycles computed ahead are taken over; nothing changes what
         happens later)."""
-        self._catch_up(t)
+        # the bus calls this for every drive after each of its runs, and mostly no cycle is due: then
+        # _catch_up would only move _now, done here without its call
+        tick = self._next_tick
+        if tick is not None and tick <= t:
+            self._catch_up(t)
+        elif t > self._now:
+            self._now = t
 
     def sync(self, t: int) -> None:
         """An input is about to arrive at t (a frame for this drive, a test hook): run to t, forget what was

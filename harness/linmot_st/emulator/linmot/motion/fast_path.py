@@ -1,4 +1,5 @@
-"""Quiet cycles: plain motion, nothing for the state machine to do. A part of MotionControl (control.py).
+"""Quiet cycles: plain motion, or a special state's plan running (homing, jogging...), nothing for the state
+machine to do. A part of MotionControl (control.py).
 
 A cycle is quiet when the generic cycle would only move the setpoint and the axis and find every output word
 (status, state var, warn, error) unchanged. Such cycles run in a tight loop, and, where no event-driven TxPDO
@@ -18,6 +19,9 @@ from ....protocol import words as W
 from .trajectory import Sample
 
 _PLAIN_STATES = frozenset({W.READY_TO_OPERATE, W.OPERATION_ENABLED, W.ABORTING, W.FREEZING})
+# the special states (homing, jogging, going to a position...): quiet too while their plan runs, as their
+# per-cycle step (_progress_special) then changes nothing; _quiet_run says when it would
+_SPECIAL_STATES = frozenset(W.SPECIAL_STATES)
 _CYCLE_TIME = itemgetter(0)     # the time of a cycle computed ahead (made once: _apply_ahead runs on every SYNC)
 
 
@@ -29,7 +33,8 @@ class FastPath:
     _horizon = 8
 
     def _plain(self) -> bool:
-        return (self.running and self.controlled and self.state in _PLAIN_STATES and self.after_stop is None
+        return (self.running and self.controlled and (self.state in _PLAIN_STATES or self.state in _SPECIAL_STATES)
+                and self.after_stop is None
                 and not self.ct_runner.running and not self.events.pending and not self.axis.blocked
                 and not self.par(U.P_RANGE1_UPID) and not self.pending.armed and self.axis.current_limit_ma is None
                 and self._next_tick is not None and self.s.quiet_cycles
@@ -47,9 +52,14 @@ class FastPath:
         cyc, t = self.s.cycle_ns, self._next_tick
         lag_warn, lag_err = par(U.P_LAG_ALWAYS_WARN, 1 << 31), par(U.P_LAG_ALWAYS_ERROR, 1 << 31)
         st_warn, st_err = par(U.P_LAG_STANDING_WARN, 1 << 31), par(U.P_LAG_STANDING_ERROR, 1 << 31)
-        limits = self.homed and par(U.P_LIMITS_ENABLE)
+        state = self.state
+        # a special state's step (_progress_special) acts when its plan ends (the next phase, or finished), and
+        # in the homing search when the following error shows the mechanical stop; finished, it does nothing
+        special = state in _SPECIAL_STATES and self.sub != W.SUB_FINISHED
+        homing_search = special and state == W.HOMING and self._special_phase == 1
+        limits = self.homed and state != W.HOMING and par(U.P_LIMITS_ENABLE)      # _monitor's condition
         lim_neg, lim_pos = par(U.P_LIMIT_NEGATIVE, -(1 << 31)), par(U.P_LIMIT_POSITIVE, 1 << 31)
-        target_ok = self.state >= W.OPERATION_ENABLED
+        target_ok = state >= W.OPERATION_ENABLED
         window, hold = self.s.in_target_window_pu, self.s.in_target_hold_ns
         gen_target = gen.target
         # `active` (the setpoint generation runs) is the same in every quiet cycle of a run: the first cycle
@@ -59,8 +69,9 @@ class FastPath:
         active = bool(self.words[0] & W.SW_MOTION_ACTIVE)
         if active:
             t_limit = min(t_limit, gen.end_ns - 1)      # a run while active ends before the plan's end
-        elif t < gen.end_ns:
-            return False                                # the plan runs again: the bit comes back
+        elif t < gen.end_ns or special:
+            return False                                # the plan runs again: the bit comes back; or the
+                                                        # special state's plan ended: its step acts
         warn_bits, in_target, since, prev_vd = self.warn_bits, self.in_target, self._in_window_since, self._prev_vd
         if not limits:
             lim_neg, lim_pos = -math.inf, math.inf
@@ -70,6 +81,11 @@ class FastPath:
         # while active, a cycle is quiet when lag_lo < err <= lag_hi (the always-warn bit and error unchanged)
         lag_lo = lag_warn if warn_bits & W.WARN_POS_LAG_ALWAYS else -1.0
         lag_hi = lag_err if warn_bits & W.WARN_POS_LAG_ALWAYS else min(lag_warn, lag_err)
+        if homing_search:
+            # _monitor sets no warn bit and checks no lag there; the search ends where err exceeds the stop error
+            if warn_bits:
+                return False
+            lag_lo, lag_hi = -1.0, self.s.homing_stop_error_pu
         sw, sv = self.words[0], self.words[1]
         record = self.s.record_trajectory
         to_trajectory = samples is None

@@ -117,8 +117,10 @@ class StatusWords:
 
     def _in_range_1(self) -> bool:
         upid = self.par(P_RANGE1_UPID)
+        if not upid:                    # no range watched (the default): at every record, so checked first
+            return False
         lo, hi = self.par(P_RANGE1_MIN), self.par(P_RANGE1_MAX)
-        if not upid or lo > hi:
+        if lo > hi:
             return False
         v = self.variable(upid)
         if v is None:
