@@ -35,7 +35,8 @@ class FastPath:
     def _plain(self) -> bool:
         return (self.running and self.controlled and (self.state in _PLAIN_STATES or self.state in _SPECIAL_STATES)
                 and self.after_stop is None
-                and not self.ct_runner.running and not self.events.pending and not self.axis.blocked
+                and (not self.ct_runner.running or self.ct_runner.quiet_wait is not None)
+                and not self.events.pending and not self.axis.blocked
                 and not self.par(U.P_RANGE1_UPID) and not self.pending.armed and self.axis.current_limit_ma is None
                 and self._next_tick is not None and self.s.quiet_cycles
                 and not getattr(self.gen, "stepwise", False))   # a plan computed cycle by cycle (stepwise.py)
@@ -63,9 +64,10 @@ class FastPath:
         window, hold = self.s.in_target_window_pu, self.s.in_target_hold_ns
         gen_target = gen.target
         # `active` (the setpoint generation runs) is the same in every quiet cycle of a run: the first cycle
-        # where it changes is not quiet. It is the status word's Motion Active bit as last recorded (_plain
-        # excludes a running command table), not the plan at _now: _now may be a later observation time, and
-        # a plan that ended between the last cycle and it has not cleared the bit yet (the next cycle does).
+        # where it changes is not quiet. It is the status word's Motion Active bit as last recorded, not the plan
+        # at _now: _now may be a later observation time, and a plan that ended between the last cycle and it has
+        # not cleared the bit yet (the next cycle does). A running command table holds the bit after the plan's
+        # end too: the run still ends before the plan's end (the generic cycles take the table's waits from there).
         active = bool(self.words[0] & W.SW_MOTION_ACTIVE)
         if active:
             t_limit = min(t_limit, gen.end_ns - 1)      # a run while active ends before the plan's end
@@ -86,6 +88,9 @@ class FastPath:
             if warn_bits:
                 return False
             lag_lo, lag_hi = -1.0, self.s.homing_stop_error_pu
+        # a command-table sequence in a wait (_plain lets only the quiet ones through): its step changes nothing
+        # in a cycle where the condition does not hold yet, so the cycle is quiet up to the one where it does
+        wait = self.ct_runner.quiet_wait if self.ct_runner.running else None
         sw, sv = self.words[0], self.words[1]
         record = self.s.record_trajectory
         to_trajectory = samples is None
@@ -104,7 +109,7 @@ class FastPath:
         p = 0.0
         t0 = t
         for p1, v1 in gen.demands(t, cyc):
-            if t > t_limit:
+            if t > t_limit or (wait is not None and wait(t)):
                 break
             dv = v1 - prev_vd                           # the same float in both terms: computed once
             e = p1 - dv * h / 2 - prev_vd * h - (physical + offset)
