@@ -12,9 +12,9 @@ from __future__ import annotations
 
 import math
 from bisect import bisect_right
+from itertools import islice
 from operator import itemgetter
 
-from ....protocol import upids as U
 from ....protocol import words as W
 from .trajectory import Sample
 
@@ -37,7 +37,7 @@ class FastPath:
                 and self.after_stop is None
                 and (not self.ct_runner.running or self.ct_runner.quiet_wait is not None)
                 and not self.events.pending and not self.axis.blocked
-                and not self.par(U.P_RANGE1_UPID) and not self.pending.armed and self.axis.current_limit_ma is None
+                and not self._range1.ram and not self.pending.armed and self.axis.current_limit_ma is None
                 and self._next_tick is not None and self.s.quiet_cycles
                 and not getattr(self.gen, "stepwise", False))   # a plan computed cycle by cycle (stepwise.py)
 
@@ -49,17 +49,18 @@ class FastPath:
         The hottest loop of the model: the demand comes from the plan's `demands` walk, Axis.follow's
         arithmetic is inlined term for term (so every value is bit-identical to the generic cycle's; the
         equivalence tests compare them exactly), the state lives in locals and is written back once."""
-        gen, axis, par = self.gen, self.axis, self.par
+        gen, axis = self.gen, self.axis
         cyc, t = self.s.cycle_ns, self._next_tick
-        lag_warn, lag_err = par(U.P_LAG_ALWAYS_WARN, 1 << 31), par(U.P_LAG_ALWAYS_ERROR, 1 << 31)
-        st_warn, st_err = par(U.P_LAG_STANDING_WARN, 1 << 31), par(U.P_LAG_STANDING_ERROR, 1 << 31)
+        r_warn, r_err, r_st_warn, r_st_err = self._lag              # _monitor's parameters
+        lag_warn, lag_err, st_warn, st_err = r_warn.ram, r_err.ram, r_st_warn.ram, r_st_err.ram
+        enabled, negative, positive = self._limits
         state = self.state
         # a special state's step (_progress_special) acts when its plan ends (the next phase, or finished), and
         # in the homing search when the following error shows the mechanical stop; finished, it does nothing
         special = state in _SPECIAL_STATES and self.sub != W.SUB_FINISHED
         homing_search = special and state == W.HOMING and self._special_phase == 1
-        limits = self.homed and state != W.HOMING and par(U.P_LIMITS_ENABLE)      # _monitor's condition
-        lim_neg, lim_pos = par(U.P_LIMIT_NEGATIVE, -(1 << 31)), par(U.P_LIMIT_POSITIVE, 1 << 31)
+        limits = self.homed and state != W.HOMING and enabled.ram      # _monitor's condition
+        lim_neg, lim_pos = negative.ram, positive.ram
         target_ok = state >= W.OPERATION_ENABLED
         window, hold = self.s.in_target_window_pu, self.s.in_target_hold_ns
         gen_target = gen.target
@@ -108,8 +109,10 @@ class FastPath:
         physical, velocity, acceleration = axis.physical, axis.velocity, axis.acceleration
         p = 0.0
         t0 = t
-        for p1, v1 in gen.demands(t, cyc):
-            if t > t_limit or (wait is not None and wait(t)):
+        # the cycles up to t_limit, so that no demand past it is computed (one per call: in a run of one cycle,
+        # as where a TxPDO needs every cycle, a second demand would cost as much as the first)
+        for p1, v1 in islice(gen.demands(t, cyc), (t_limit - t) // cyc + 1 if t_limit >= t else 0):
+            if wait is not None and wait(t):
                 break
             dv = v1 - prev_vd                           # the same float in both terms: computed once
             e = p1 - dv * h / 2 - prev_vd * h - (physical + offset)
