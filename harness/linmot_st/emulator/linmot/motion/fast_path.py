@@ -100,12 +100,8 @@ class FastPath:
         new_sample = tuple.__new__          # Sample(...) without its Python-level __new__
         add_sample, add_entry = samples.append, entries.append if entries is not None else None
         # Axis.follow, inlined (its constants, then its state in locals)
-        h, offset = axis.h, axis.offset
-        p00, p01, p10, p11 = axis._phi
-        g0, g1 = axis._gam
-        one_kff = 1.0 - axis._kff
-        stop_neg, stop_pos = axis.s.stop_negative_pu, axis.s.stop_positive_pu
-        settle = axis.s.settle_pu
+        h, p00, p01, p10, p11, g0, g1, one_kff, stop_neg, stop_pos, settle = axis.follow_constants
+        offset = axis.offset
         physical, velocity, acceleration = axis.physical, axis.velocity, axis.acceleration
         p = 0.0
         t0 = t
