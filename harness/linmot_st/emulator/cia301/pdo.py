@@ -161,7 +161,16 @@ class ProcessData:
         mc = self.drive.mc
         pack = struct.Struct("<HHHH").pack
         if n == 0:                      # status word, state var, logged error code, warn word
-            return lambda: pack(*mc.words)
+            # publish() packs it after every SYNC and MC cycle to compare, but mc.words is a new tuple only
+            # when an event or cycle recorded the words: the same tuple packs to the same bytes
+            memo: list = [None, b""]
+
+            def words() -> bytes:
+                w = mc.words
+                if w is not memo[0]:
+                    memo[0], memo[1] = w, pack(*w)
+                return memo[1]
+            return words
         if n == 1:                      # motion command status, actual position 16 bit, current, demand pos 16 bit
             return mc.txpdo2_payload
         return None                     # TxPDO3: empty unless mapped by UPID

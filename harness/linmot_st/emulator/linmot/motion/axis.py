@@ -44,6 +44,9 @@ class Axis:
         self._phi = (ex[0][0], ex[0][1], ex[1][0], ex[1][1])
         self._gam = (ex[0][2], ex[1][2])
         self._kff = settings.acc_feedforward
+        # follow()'s constants as the quiet cycles inline it (fast_path.py), unpacked once per run
+        self.follow_constants = (self.h, *self._phi, *self._gam, 1.0 - self._kff, settings.stop_negative_pu,
+                                 settings.stop_positive_pu, settings.settle_pu)
         self.physical = float(settings.start_position_pu)   # the slider in its own frame
         self.offset = -self.physical                        # drive frame = physical + offset (0 at power-on)
         self.velocity = 0.0                                 # pu/s

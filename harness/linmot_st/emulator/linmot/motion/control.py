@@ -29,7 +29,9 @@ from ....protocol.upids import (
     P_LIMIT_NEGATIVE,
     P_LIMIT_POSITIVE,
     P_LIMITS_ENABLE,
+    P_RANGE1_UPID,
     P_READY_TO_OPERATE_MODE,
+    P_SCALE_POS,
 )
 from ..master_encoder import MasterEncoder
 from . import triggered  # noqa: F401 (registers the I/O and triggered commands' handlers)
@@ -47,6 +49,14 @@ from .stream import check as stream_check
 from .trajectory import Sample, Trajectory
 
 
+class _Absent:
+    """A parameter the drive does not have, as MotionControl.ref gives it: par()'s default as its RAM value."""
+    __slots__ = ("ram",)
+
+    def __init__(self, ram: int):
+        self.ram = ram
+
+
 class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
     def __init__(self, settings: MotionSettings, hw_test_ns: int, params, curves, ct,
                  log_error: Callable[[int, int], None]):
@@ -54,6 +64,13 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
         self.hw_test_ns = hw_test_ns
         self.params, self.curves, self.ct = params, curves, ct
         self._pars = params.by_upid
+        # the parameters read in every cycle and record (_monitor, _quiet_run, _plain, the status word, TxPDO2):
+        # lag warn/error always and standing, limits enable/negative/positive, range 1's UPID, position scale
+        self._lag = (self.ref(P_LAG_ALWAYS_WARN, 1 << 31), self.ref(P_LAG_ALWAYS_ERROR, 1 << 31),
+                     self.ref(P_LAG_STANDING_WARN, 1 << 31), self.ref(P_LAG_STANDING_ERROR, 1 << 31))
+        self._limits = (self.ref(P_LIMITS_ENABLE), self.ref(P_LIMIT_NEGATIVE, -(1 << 31)),
+                        self.ref(P_LIMIT_POSITIVE, 1 << 31))
+        self._range1, self._scale_pos = self.ref(P_RANGE1_UPID), self.ref(P_SCALE_POS, 1000)
         self.words = (0, 0, 0, 0)          # status word, state var, logged error, warn word: set by _record
         self._log_error = log_error
         self.axis = Axis(settings)
@@ -114,6 +131,13 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
         """The RAM value of a parameter (default where the drive has no such UPID)."""
         p = self._pars.get(upid)
         return default if p is None else p.ram
+
+    def ref(self, upid: int, default: int = 0):
+        """The parameter itself: its `.ram` is par(upid, default) at any later time, read without par()'s call
+        where it is read every cycle. The store keeps one Parameter object per UPID for the drive's life (writes
+        change its `ram`); a UPID the drive does not have gives a stand-in that holds the default."""
+        p = self._pars.get(upid)
+        return _Absent(default) if p is None else p
 
     # ------------------------------------------------------------------ MC software start / stop
     def start(self, t: int, motor_defined: bool) -> int | None:
@@ -255,7 +279,13 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
     def observe(self, t: int) -> None:
         """Bring the inspectable state to time t (cycles computed ahead are taken over; nothing changes what
         happens later)."""
-        self._catch_up(t)
+        # the bus calls this for every drive after each of its runs, and mostly no cycle is due: then
+        # _catch_up would only move _now, done here without its call
+        tick = self._next_tick
+        if tick is not None and tick <= t:
+            self._catch_up(t)
+        elif t > self._now:
+            self._now = t
 
     def sync(self, t: int) -> None:
         """An input is about to arrive at t (a frame for this drive, a test hook): run to t, forget what was
@@ -323,24 +353,26 @@ class MotionControl(Interpreter, StateMachine, FastPath, StatusWords):
         err = abs(self.dem_p - self.axis.position)
         active = not self.gen.done(t)
         homing_search = self.state == W.HOMING and self._special_phase == 1
+        lag_warn, lag_err, standing_warn, standing_err = self._lag
         warn = 0
         if not homing_search:
-            if err > self.par(P_LAG_ALWAYS_WARN, 1 << 31):
+            if err > lag_warn.ram:
                 warn |= W.WARN_POS_LAG_ALWAYS
-            if not active and err > self.par(P_LAG_STANDING_WARN, 1 << 31):
+            if not active and err > standing_warn.ram:
                 warn |= W.WARN_POS_LAG_STANDING
         self.warn_bits = warn
         if homing_search:
             return
-        if err > self.par(P_LAG_ALWAYS_ERROR, 1 << 31):
+        enabled, negative, positive = self._limits
+        if err > lag_err.ram:
             self._fail(W.ERR_POS_LAG_ALWAYS, t)
-        elif not active and err > self.par(P_LAG_STANDING_ERROR, 1 << 31):
+        elif not active and err > standing_err.ram:
             self._fail(W.ERR_POS_LAG_STANDING, t)
-        elif self.homed and self.par(P_LIMITS_ENABLE) and self.state != W.HOMING:
+        elif self.homed and enabled.ram and self.state != W.HOMING:
             x = self.axis.position
-            if x < self.par(P_LIMIT_NEGATIVE, -(1 << 31)):
+            if x < negative.ram:
                 self._fail(W.ERR_MIN_POS_UNDERSHOT, t)
-            elif x > self.par(P_LIMIT_POSITIVE, 1 << 31):
+            elif x > positive.ram:
                 self._fail(W.ERR_MAX_POS_OVERSHOT, t)
 
     def _update_in_target(self, t: int) -> None:

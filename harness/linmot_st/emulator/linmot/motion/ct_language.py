@@ -97,6 +97,10 @@ WAITS: dict[int, WaitFactory] = {
     C.WAIT_CURRENT_GREATER: _level(_current, GT),
     C.WAIT_CURRENT_LESS: _level(_current, LT),
 }
+# waits whose condition reads nothing a quiet MC cycle changes (the time, the plan's end, the in-target bit; not
+# the positions, velocities or current): the quiet cycles (fast_path.py) check them in their loop, so a sequence
+# waiting on one runs no generic cycle until the wait holds (test_motion_equivalence.py compares both paths)
+QUIET_WAITS = frozenset({C.WAIT_TIME, C.WAIT_MOTION_FINISHED, C.WAIT_IN_TARGET_POSITION})
 
 
 def _compare(signal: Signal, op) -> Callable[[object, dict], bool]:

@@ -18,7 +18,7 @@ from collections.abc import Callable
 from ....protocol import commands as C
 from ....protocol import words as W
 from ....protocol.commands import Kind
-from .ct_language import WAITS, if_target
+from .ct_language import QUIET_WAITS, WAITS, if_target
 
 END = 0xFFFF
 
@@ -31,10 +31,17 @@ class CtRunner:
         self.executed: list[int] = []       # entries run by the present sequence, in order (tests, reports)
         self.variables = {1: 0, 2: 0}       # Cmd Table Var 1 / Var 2 (UPIDs 1E72h / 1E73h), SInt32
         self._wait: Callable[[int], bool] | None = None
+        self._wait_id = 0                   # the command ID of the wait that set _wait
         self._link = END
 
     def clear_variables(self) -> None:
         self.variables[1] = self.variables[2] = 0
+
+    @property
+    def quiet_wait(self) -> Callable[[int], bool] | None:
+        """The condition of the wait the sequence is in, where a quiet MC cycle cannot change what it reads
+        (ct_language.QUIET_WAITS); None otherwise. While it is False, the sequence's step changes nothing."""
+        return self._wait if self._wait is not None and self._wait_id in QUIET_WAITS else None
 
     def stop(self) -> None:
         self.running = False
@@ -75,7 +82,7 @@ class CtRunner:
         row, fields = C.decode(header, params)
         if cid in WAITS:
             self.mc.executed.append((t, header, bytes(params[:16])))
-            self._wait = WAITS[cid](self.mc, fields, t)
+            self._wait, self._wait_id = WAITS[cid](self.mc, fields, t), cid
             self.entry = None
             self.mc._wake(t)            # the wait is checked every cycle (also when it is the first entry)
             return

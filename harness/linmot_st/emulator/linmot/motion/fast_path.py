@@ -1,4 +1,5 @@
-"""Quiet cycles: plain motion, nothing for the state machine to do. A part of MotionControl (control.py).
+"""Quiet cycles: plain motion, or a special state's plan running (homing, jogging...), nothing for the state
+machine to do. A part of MotionControl (control.py).
 
 A cycle is quiet when the generic cycle would only move the setpoint and the axis and find every output word
 (status, state var, warn, error) unchanged. Such cycles run in a tight loop, and, where no event-driven TxPDO
@@ -11,13 +12,16 @@ from __future__ import annotations
 
 import math
 from bisect import bisect_right
+from itertools import islice
 from operator import itemgetter
 
-from ....protocol import upids as U
 from ....protocol import words as W
 from .trajectory import Sample
 
 _PLAIN_STATES = frozenset({W.READY_TO_OPERATE, W.OPERATION_ENABLED, W.ABORTING, W.FREEZING})
+# the special states (homing, jogging, going to a position...): quiet too while their plan runs, as their
+# per-cycle step (_progress_special) then changes nothing; _quiet_run says when it would
+_SPECIAL_STATES = frozenset(W.SPECIAL_STATES)
 _CYCLE_TIME = itemgetter(0)     # the time of a cycle computed ahead (made once: _apply_ahead runs on every SYNC)
 
 
@@ -29,9 +33,11 @@ class FastPath:
     _horizon = 8
 
     def _plain(self) -> bool:
-        return (self.running and self.controlled and self.state in _PLAIN_STATES and self.after_stop is None
-                and not self.ct_runner.running and not self.events.pending and not self.axis.blocked
-                and not self.par(U.P_RANGE1_UPID) and not self.pending.armed and self.axis.current_limit_ma is None
+        return (self.running and self.controlled and (self.state in _PLAIN_STATES or self.state in _SPECIAL_STATES)
+                and self.after_stop is None
+                and (not self.ct_runner.running or self.ct_runner.quiet_wait is not None)
+                and not self.events.pending and not self.axis.blocked
+                and not self._range1.ram and not self.pending.armed and self.axis.current_limit_ma is None
                 and self._next_tick is not None and self.s.quiet_cycles
                 and not getattr(self.gen, "stepwise", False))   # a plan computed cycle by cycle (stepwise.py)
 
@@ -43,24 +49,32 @@ class FastPath:
         The hottest loop of the model: the demand comes from the plan's `demands` walk, Axis.follow's
         arithmetic is inlined term for term (so every value is bit-identical to the generic cycle's; the
         equivalence tests compare them exactly), the state lives in locals and is written back once."""
-        gen, axis, par = self.gen, self.axis, self.par
+        gen, axis = self.gen, self.axis
         cyc, t = self.s.cycle_ns, self._next_tick
-        lag_warn, lag_err = par(U.P_LAG_ALWAYS_WARN, 1 << 31), par(U.P_LAG_ALWAYS_ERROR, 1 << 31)
-        st_warn, st_err = par(U.P_LAG_STANDING_WARN, 1 << 31), par(U.P_LAG_STANDING_ERROR, 1 << 31)
-        limits = self.homed and par(U.P_LIMITS_ENABLE)
-        lim_neg, lim_pos = par(U.P_LIMIT_NEGATIVE, -(1 << 31)), par(U.P_LIMIT_POSITIVE, 1 << 31)
-        target_ok = self.state >= W.OPERATION_ENABLED
+        r_warn, r_err, r_st_warn, r_st_err = self._lag              # _monitor's parameters
+        lag_warn, lag_err, st_warn, st_err = r_warn.ram, r_err.ram, r_st_warn.ram, r_st_err.ram
+        enabled, negative, positive = self._limits
+        state = self.state
+        # a special state's step (_progress_special) acts when its plan ends (the next phase, or finished), and
+        # in the homing search when the following error shows the mechanical stop; finished, it does nothing
+        special = state in _SPECIAL_STATES and self.sub != W.SUB_FINISHED
+        homing_search = special and state == W.HOMING and self._special_phase == 1
+        limits = self.homed and state != W.HOMING and enabled.ram      # _monitor's condition
+        lim_neg, lim_pos = negative.ram, positive.ram
+        target_ok = state >= W.OPERATION_ENABLED
         window, hold = self.s.in_target_window_pu, self.s.in_target_hold_ns
         gen_target = gen.target
         # `active` (the setpoint generation runs) is the same in every quiet cycle of a run: the first cycle
-        # where it changes is not quiet. It is the status word's Motion Active bit as last recorded (_plain
-        # excludes a running command table), not the plan at _now: _now may be a later observation time, and
-        # a plan that ended between the last cycle and it has not cleared the bit yet (the next cycle does).
+        # where it changes is not quiet. It is the status word's Motion Active bit as last recorded, not the plan
+        # at _now: _now may be a later observation time, and a plan that ended between the last cycle and it has
+        # not cleared the bit yet (the next cycle does). A running command table holds the bit after the plan's
+        # end too: the run still ends before the plan's end (the generic cycles take the table's waits from there).
         active = bool(self.words[0] & W.SW_MOTION_ACTIVE)
         if active:
             t_limit = min(t_limit, gen.end_ns - 1)      # a run while active ends before the plan's end
-        elif t < gen.end_ns:
-            return False                                # the plan runs again: the bit comes back
+        elif t < gen.end_ns or special:
+            return False                                # the plan runs again: the bit comes back; or the
+                                                        # special state's plan ended: its step acts
         warn_bits, in_target, since, prev_vd = self.warn_bits, self.in_target, self._in_window_since, self._prev_vd
         if not limits:
             lim_neg, lim_pos = -math.inf, math.inf
@@ -70,6 +84,14 @@ class FastPath:
         # while active, a cycle is quiet when lag_lo < err <= lag_hi (the always-warn bit and error unchanged)
         lag_lo = lag_warn if warn_bits & W.WARN_POS_LAG_ALWAYS else -1.0
         lag_hi = lag_err if warn_bits & W.WARN_POS_LAG_ALWAYS else min(lag_warn, lag_err)
+        if homing_search:
+            # _monitor sets no warn bit and checks no lag there; the search ends where err exceeds the stop error
+            if warn_bits:
+                return False
+            lag_lo, lag_hi = -1.0, self.s.homing_stop_error_pu
+        # a command-table sequence in a wait (_plain lets only the quiet ones through): its step changes nothing
+        # in a cycle where the condition does not hold yet, so the cycle is quiet up to the one where it does
+        wait = self.ct_runner.quiet_wait if self.ct_runner.running else None
         sw, sv = self.words[0], self.words[1]
         record = self.s.record_trajectory
         to_trajectory = samples is None
@@ -78,17 +100,15 @@ class FastPath:
         new_sample = tuple.__new__          # Sample(...) without its Python-level __new__
         add_sample, add_entry = samples.append, entries.append if entries is not None else None
         # Axis.follow, inlined (its constants, then its state in locals)
-        h, offset = axis.h, axis.offset
-        p00, p01, p10, p11 = axis._phi
-        g0, g1 = axis._gam
-        one_kff = 1.0 - axis._kff
-        stop_neg, stop_pos = axis.s.stop_negative_pu, axis.s.stop_positive_pu
-        settle = axis.s.settle_pu
+        h, p00, p01, p10, p11, g0, g1, one_kff, stop_neg, stop_pos, settle = axis.follow_constants
+        offset = axis.offset
         physical, velocity, acceleration = axis.physical, axis.velocity, axis.acceleration
         p = 0.0
         t0 = t
-        for p1, v1 in gen.demands(t, cyc):
-            if t > t_limit:
+        # the cycles up to t_limit, so that no demand past it is computed (one per call: in a run of one cycle,
+        # as where a TxPDO needs every cycle, a second demand would cost as much as the first)
+        for p1, v1 in islice(gen.demands(t, cyc), (t_limit - t) // cyc + 1 if t_limit >= t else 0):
+            if wait is not None and wait(t):
                 break
             dv = v1 - prev_vd                           # the same float in both terms: computed once
             e = p1 - dv * h / 2 - prev_vd * h - (physical + offset)

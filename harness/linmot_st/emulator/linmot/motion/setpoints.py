@@ -37,6 +37,7 @@ class VaPlan:
         segs: list[_Seg] = []
         t = _plan(segs, 0.0, float(p0), float(v0), self.target, self.vmax, self.acc, self.dec)
         self._segs = segs
+        self._rows = [(s.t, s.p, s.v, s.a) for s in segs]     # the segments as demands() walks them (made once)
         self._start = (float(p0), float(v0))
         self.end_s = t
         self.end_ns = origin_ns + math.ceil(t * 1e9)
@@ -62,7 +63,7 @@ class VaPlan:
         """(position, velocity) at t_ns, t_ns + step_ns, ...: `at`'s arithmetic, term for term (so the values
         are bit-identical), with the segment found by walking forward as time only grows."""
         origin, end_s, ns = self.origin_ns, self.end_s, NS      # NS in a local: read once per cycle
-        segs = [(s.t, s.p, s.v, s.a) for s in self._segs]
+        segs = self._rows
         inf = float("inf")
         i = 0
         if segs:

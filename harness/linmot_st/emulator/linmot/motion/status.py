@@ -11,7 +11,6 @@ from ....protocol import words as W
 from ....protocol.upids import (
     P_RANGE1_MAX,
     P_RANGE1_MIN,
-    P_RANGE1_UPID,
     P_SCALE_POS,
     V_ACTUAL_POSITION,
     V_ACTUAL_POSITION_16,
@@ -116,9 +115,11 @@ class StatusWords:
         return bits
 
     def _in_range_1(self) -> bool:
-        upid = self.par(P_RANGE1_UPID)
+        upid = self._range1.ram                 # par(P_RANGE1_UPID), read at every record
+        if not upid:                    # no range watched (the default): at every record, so checked first
+            return False
         lo, hi = self.par(P_RANGE1_MIN), self.par(P_RANGE1_MAX)
-        if not upid or lo > hi:
+        if lo > hi:
             return False
         v = self.variable(upid)
         if v is None:
@@ -156,8 +157,7 @@ class StatusWords:
         16 bit, demand current, demand position 16 bit; the same values as variable(), packed in one call with
         a precomputed struct, as TxPDO2 goes on every SYNC."""
         # par() and max() without their calls: the same scale as position_16's
-        p = self._pars.get(P_SCALE_POS)
-        scale = 1000 if p is None else p.ram
+        scale = self._scale_pos.ram
         if scale < 1:
             scale = 1
         axis = self.axis
