@@ -699,7 +699,11 @@ class CodeGen:
         pou, inst, bound = call.target
         ip, _ = self.inst_place(call, inst)
         posts = []
-        for p, a in bound:
+        # in the FB's declaration order (EN first), not the call's, as MatIEC (generate_c_st.cc,
+        # fb_invocation_c): an argument's side effect (a FUNCTION's in-out) and which of two copies-out to
+        # the same variable wins depend on it
+        order = {k: i for i, k in enumerate(pou.vars)}
+        for p, a in sorted(bound, key=lambda pa: order[pa[0].key]):
             if self.is_ref(p):
                 src, sflags = self.place(a.value)
                 self.emit(f"{ip}.{p.key}.value = &{src};")
