@@ -12,9 +12,15 @@ whole program, or leaves it a copy:
   has a VAR_EXTERNAL, a located variable or a direct address (%IX0.0), so it cannot see or change the
   actual by another name while its copy would differ;
 * every call binds the parameter to a variable whose root is neither the instance itself nor the root of
-  another parameter so passed, nor of an output (`=>`) of the same call (the body, or the copies' write-back
-  order, would tell them apart), and whose indices read none of these and call nothing (a write-back
-  evaluates them again);
+  another in-out, nor of an output (`=>`) of the same call (the body, or the copies' write-back order,
+  would tell them apart), and whose indices read none of these and call nothing (a write-back evaluates
+  them again);
+* no FUNCTION called in the call's arguments writes the parameter's root or a variable its indices read
+  (through the FUNCTION's in-outs), nor reaches a located variable or an address: MatIEC copies the
+  parameters in one by one in the FB's declaration order, so such a write may come after the copy;
+* an in-out's root is read by no index of another in-out's actual or an output's target of the same call:
+  MatIEC evaluates those again after the body, before or after this in-out's copy-out as the FB declares
+  them, where a pointer has changed the variable already;
 * no code reads or writes the parameter from outside the FB (`Inst.Box`): the copy there would be stale;
 * an input: the FB's body never writes it, nor passes it as an in-out or an output target.
 
@@ -46,7 +52,7 @@ def by_reference(prog: Program) -> set[tuple[str, str]]:
             continue
         for node in _walk(p.ast.body):
             if isinstance(node, A.Call) and isinstance(node.target, tuple) and node.target[1] is not None:
-                refs -= _unsafe(node, refs)
+                refs -= _unsafe(node, refs, reaches)
             elif isinstance(node, A.Member) and isinstance(getattr(node.base, "ty", None), T.PouType):
                 sym = getattr(node, "sym", None)
                 if isinstance(sym, Var) and sym.kind in ("VAR_IN_OUT", "VAR_INPUT"):
@@ -81,27 +87,56 @@ def _written(pou: PouSym) -> set:
     return out
 
 
-def _unsafe(call: A.Call, refs: set[tuple[str, str]]) -> set[tuple[str, str]]:
+def _unsafe(call: A.Call, refs: set[tuple[str, str]], reaches: dict[str, bool]) -> set[tuple[str, str]]:
     """The candidates among the called FB's parameters that this call does not let pass by reference."""
     pou, inst, bound = call.target
+    everything = {(pou.key, p.key) for p in pou.params}
     mine = [(p, a) for p, a in bound if (pou.key, p.key) in refs]
-    unsafe = {(pou.key, p.key) for p in pou.params} - {(pou.key, p.key) for p, _ in mine}     # left unbound
+    unsafe = everything - {(pou.key, p.key) for p, _ in mine}     # left unbound
     # what the call writes: its in-outs during the body (by reference, or by the copy-out after it) and its
     # outputs after it; an input's copy is taken before the body, so its pointer must see none of them
     written = [(p, _root(a.value)) for p, a in bound
                if p.kind == "VAR_IN_OUT" or (p.kind == "VAR_OUTPUT" and a.output)]
+    # what the arguments' FUNCTIONs write through their in-outs: MatIEC copies the parameters in one by one
+    # (in the FB's declaration order), so such a write may come after a parameter's copy
+    effects, opaque = _side_effects([a.value for _, a in bound], reaches)
+    if opaque:
+        return everything
+    # the places the copy-out evaluates again after the body (outputs' targets, in-outs' actuals): an index
+    # there that reads an in-out's variable reads it before or after that in-out's own copy-out, as the FB
+    # declares them, where a pointer has written it already
+    after = [(p, a.value) for p, a in bound if p.kind == "VAR_IN_OUT" or (p.kind == "VAR_OUTPUT" and a.output)]
     for p, a in mine:
         root = _root(a.value) if _is_place(a.value) else None
         others = [r for q, r in written if q is not p]
-        clash = root is None or root is inst or any(r is root for r in others)
+        clash = root is None or root is inst or any(r is root for r in [*others, *effects])
+        indices = list(_walk(_index_exprs(a.value)))
+        if any(isinstance(n, A.Name) and any(n.sym is r for r in effects) for n in indices):
+            clash = True
         if p.kind == "VAR_IN_OUT":      # a copy-out evaluates the indices again, after the body
-            for node in _walk(_index_exprs(a.value)):
+            for node in indices:
                 if isinstance(node, A.Call) or (isinstance(node, A.Name)
                                                 and any(node.sym is r for r in [*others, root, inst])):
+                    clash = True
+            for q, target in after:
+                if q is not p and any(isinstance(n, A.Name) and n.sym is root
+                                      for n in _walk(_index_exprs(target))):
                     clash = True
         if clash:
             unsafe.add((pou.key, p.key))
     return unsafe
+
+
+def _side_effects(exprs: list[A.Node], reaches: dict[str, bool]) -> tuple[list, bool]:
+    """The roots the FUNCTIONs called in `exprs` (at any depth) may write through their in-outs, and whether
+    one of them reaches a located variable or an address (then what it writes is not known by name)."""
+    roots, opaque = [], False
+    for node in _walk(exprs):
+        if isinstance(node, A.Call) and isinstance(node.target, tuple) and node.target[1] is None:
+            fn = node.target[0]
+            opaque = opaque or reaches.get(fn.key, True)
+            roots.extend(_root(a.value) for q, a in node.target[2] if q.kind == "VAR_IN_OUT")
+    return roots, opaque
 
 
 def _reaches_globals(prog: Program) -> dict[str, bool]:
