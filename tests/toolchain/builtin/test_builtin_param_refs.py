@@ -125,6 +125,76 @@ def test_which_in_outs_are_pointers():
     # input: its call writes the same array through the in-out; fb_scratch writes its input
 
 
+# What MatIEC evaluates between one parameter's copy-in and the body, or again after the body: a FUNCTION in
+# another argument (copied in in the FB's declaration order) and the copy-out of an output or another in-out
+# (conformance cases pou_fb_ref_side_effect, pou_fb_ref_copy_out_index).
+SIDE_EFFECTS = """
+TYPE t_a3 : ARRAY[0..2] OF INT; t_st : STRUCT x : INT; y : INT; END_STRUCT; END_TYPE
+FUNCTION f_bump : INT
+  VAR_IN_OUT x : INT; END_VAR
+  x := x + 1;
+  f_bump := x;
+END_FUNCTION
+FUNCTION_BLOCK fb_other
+  VAR_IN_OUT a : INT; END_VAR
+  VAR_INPUT k : INT; END_VAR
+  a := a + k;
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK fb_same
+  VAR_IN_OUT a : INT; END_VAR
+  VAR_INPUT k : INT; END_VAR
+  a := a + k;
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK fb_index
+  VAR_IN_OUT a : INT; END_VAR
+  VAR_INPUT k : INT; END_VAR
+  a := a + k;
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK fb_input
+  VAR_INPUT v : t_st; k : INT; END_VAR
+  VAR_OUTPUT o : INT; END_VAR
+  o := v.x + k;
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK fb_out_other
+  VAR_OUTPUT o : INT; END_VAR
+  VAR_IN_OUT a : INT; END_VAR
+  a := a + 1;
+  o := a;
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK fb_out_same
+  VAR_OUTPUT o : INT; END_VAR
+  VAR_IN_OUT a : INT; END_VAR
+  a := a + 1;
+  o := a;
+END_FUNCTION_BLOCK
+FUNCTION_BLOCK fb_inout_index
+  VAR_IN_OUT q : INT; p : INT; END_VAR
+  p := p + 1;
+  q := q + p;
+END_FUNCTION_BLOCK
+PROGRAM p_main
+  VAR
+    o : fb_other; s : fb_same; x : fb_index; u : fb_input; oo : fb_out_other; os : fb_out_same;
+    t : fb_inout_index; v, w, i, j, m, r : INT; arr : t_a3; st : t_st;
+  END_VAR
+  o(a := v, k := f_bump(w));
+  s(a := w, k := f_bump(w));
+  x(a := arr[i], k := f_bump(i));
+  u(v := st, k := f_bump(st.y), o => r);
+  oo(a := j, o => arr[i]);
+  os(a := m, o => arr[m]);
+  t(q := arr[r], p := r);
+END_PROGRAM
+"""
+
+
+def test_what_an_argument_or_a_copy_out_changes_keeps_a_copy():
+    refs = by_reference(check_text(SIDE_EFFECTS))
+    assert refs == {("FB_OTHER", "A"), ("FB_OUT_OTHER", "A")}
+    # fb_same: the FUNCTION writes the in-out's variable; fb_index: the variable of its index; fb_input: a
+    # member of the STRUCT input; fb_out_same: the output's index reads the in-out's variable;
+    # fb_inout_index.p: q's index (copied out again after the body) reads it (q: p writes its index)
+
 def _run(res, scans: int = 30, forced: int | None = None, paths: list[str] = WATCHED) -> list:
     plc = Plc(res)
     if forced is not None:
