@@ -93,19 +93,18 @@ def _unsafe(call: A.Call, refs: set[tuple[str, str]], reaches: dict[str, bool]) 
     everything = {(pou.key, p.key) for p in pou.params}
     mine = [(p, a) for p, a in bound if (pou.key, p.key) in refs]
     unsafe = everything - {(pou.key, p.key) for p, _ in mine}     # left unbound
-    # what the call writes: its in-outs during the body (by reference, or by the copy-out after it) and its
-    # outputs after it; an input's copy is taken before the body, so its pointer must see none of them
-    written = [(p, _root(a.value)) for p, a in bound
-               if p.kind == "VAR_IN_OUT" or (p.kind == "VAR_OUTPUT" and a.output)]
+    # the places the copy-out evaluates again after the body (outputs' targets, in-outs' actuals): an index
+    # there that reads an in-out's variable reads it before or after that in-out's own copy-out, as the FB
+    # declares them, where a pointer has written it already
+    after = [(p, a.value) for p, a in bound if p.kind == "VAR_IN_OUT" or (p.kind == "VAR_OUTPUT" and a.output)]
+    # what the call writes, by their roots: its in-outs during the body (by reference, or by the copy-out after
+    # it) and its outputs after it; an input's copy is taken before the body, so its pointer must see none of them
+    written = [(p, _root(v)) for p, v in after]
     # what the arguments' FUNCTIONs write through their in-outs: MatIEC copies the parameters in one by one
     # (in the FB's declaration order), so such a write may come after a parameter's copy
     effects, opaque = _side_effects([a.value for _, a in bound], reaches)
     if opaque:
         return everything
-    # the places the copy-out evaluates again after the body (outputs' targets, in-outs' actuals): an index
-    # there that reads an in-out's variable reads it before or after that in-out's own copy-out, as the FB
-    # declares them, where a pointer has written it already
-    after = [(p, a.value) for p, a in bound if p.kind == "VAR_IN_OUT" or (p.kind == "VAR_OUTPUT" and a.output)]
     for p, a in mine:
         root = _root(a.value) if _is_place(a.value) else None
         others = [r for q, r in written if q is not p]
